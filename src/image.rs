@@ -1,0 +1,171 @@
+//! Linear HDR images (RGB f32), tone mapping, and reading/writing EXR and PNG files.
+//! Files are written to a temporary name and renamed, so a file is never half-written.
+
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+use std::path::Path;
+
+/// A linear-RGB float image, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hdr {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<Vec3>,
+}
+
+impl Hdr {
+    pub fn new(width: u32, height: u32) -> Self {
+        Hdr {
+            width,
+            height,
+            data: vec![Vec3::ZERO; (width * height) as usize],
+        }
+    }
+
+    pub fn at(&self, x: u32, y: u32) -> Vec3 {
+        self.data[(y * self.width + x) as usize]
+    }
+
+    /// Mean RGB over all pixels.
+    pub fn mean(&self) -> Vec3 {
+        self.data.iter().copied().sum::<Vec3>() / self.data.len().max(1) as f32
+    }
+
+    /// Tone-mapped 8-bit sRGB pixels: `exposure * L`, clamped to [0,1], sRGB transfer.
+    pub fn to_srgb8(&self, exposure: f32) -> Vec<u8> {
+        self.data
+            .iter()
+            .flat_map(|c| {
+                (*c * exposure)
+                    .to_array()
+                    .map(|v| (srgb_oetf(v.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+            })
+            .collect()
+    }
+
+    /// Writes linear float RGB as OpenEXR.
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        let flat: Vec<f32> = self.data.iter().flat_map(|c| c.to_array()).collect();
+        let img =
+            image::Rgb32FImage::from_raw(self.width, self.height, flat).context("image size")?;
+        atomic_write(path, |tmp| {
+            img.save_with_format(tmp, image::ImageFormat::OpenExr)
+                .map_err(anyhow::Error::from)
+        })
+    }
+
+    /// Writes the tone-mapped preview as PNG.
+    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
+        let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(exposure))
+            .context("image size")?;
+        atomic_write(path, |tmp| {
+            img.save_with_format(tmp, image::ImageFormat::Png)
+                .map_err(anyhow::Error::from)
+        })
+    }
+
+    /// Reads an EXR (linear) or PNG/other 8-bit file (sRGB decoded to linear).
+    pub fn read(path: &Path) -> Result<Hdr> {
+        let img = image::open(path)
+            .with_context(|| format!("{}: cannot read the image", path.display()))?;
+        let is_float = matches!(
+            img,
+            image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_)
+        );
+        let rgb = img.to_rgb32f();
+        let (width, height) = rgb.dimensions();
+        let data = rgb
+            .pixels()
+            .map(|p| {
+                let c = Vec3::from(p.0);
+                if is_float {
+                    c
+                } else {
+                    Vec3::new(srgb_eotf(c.x), srgb_eotf(c.y), srgb_eotf(c.z))
+                }
+            })
+            .collect();
+        Ok(Hdr {
+            width,
+            height,
+            data,
+        })
+    }
+}
+
+pub fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+pub fn srgb_eotf(v: f32) -> f32 {
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Writes through `write` to a temporary file beside `path`, then renames it into place.
+pub fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if name.is_empty() {
+        bail!("{}: not a file path", path.display());
+    }
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    // Keep the extension last so that encoders chosen by extension still work.
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}.{ext}", std::process::id()));
+    let result = write(&tmp).and_then(|_| {
+        std::fs::rename(&tmp, path).with_context(|| {
+            format!(
+                "{}: cannot move the finished file into place",
+                path.display()
+            )
+        })
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// Writes bytes atomically.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    atomic_write(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(anyhow::Error::from)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact_and_png_is_srgb() {
+        let dir = std::env::temp_dir().join(format!("irad-img-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut img = Hdr::new(3, 2);
+        img.data[1] = Vec3::new(0.25, 2.5, 100.0);
+        img.data[5] = Vec3::new(0.5, 0.0, 0.001);
+        img.write_exr(&dir.join("a.exr")).unwrap();
+        assert_eq!(Hdr::read(&dir.join("a.exr")).unwrap(), img);
+        img.write_png(&dir.join("a.png"), 1.0).unwrap();
+        let back = Hdr::read(&dir.join("a.png")).unwrap();
+        assert!((back.at(2, 1).x - 0.5).abs() < 0.01 && back.at(1, 0).y == 1.0);
+        assert!(std::fs::read_dir(&dir).unwrap().all(|e| !e
+            .unwrap()
+            .file_name()
+            .to_string_lossy()
+            .contains("tmp")));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

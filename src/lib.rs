@@ -1,0 +1,13 @@
+//! irad: instant radiosity for animation sequences, with temporally coherent virtual point
+//! lights. One folder per stage of a frame: `scene` (1), `trace` (2), `vpl` (3-6), `gpu` (7),
+//! `reference`, `metrics`, `report` (8).
+
+pub mod cli;
+pub mod commands;
+pub mod image;
+pub mod math;
+pub mod reference;
+pub mod report;
+pub mod scene;
+pub mod trace;
+pub mod vpl;

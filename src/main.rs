@@ -1,0 +1,52 @@
+use clap::{Parser, Subcommand};
+use irad::cli::SceneOpts;
+use std::path::PathBuf;
+
+/// irad: instant radiosity with temporally coherent virtual point lights.
+#[derive(Parser)]
+#[command(version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Path-trace the ground truth (CPU, next-event estimation with MIS)
+    Reference {
+        #[command(flatten)]
+        opts: SceneOpts,
+        /// Samples per pixel
+        #[arg(long, default_value_t = 256)]
+        spp: u32,
+        /// Output folder
+        #[arg(long, default_value = "out/reference")]
+        out: PathBuf,
+        /// Exposure of the PNG previews (the EXR files are linear, unscaled)
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+    },
+    /// List the built-in scenes and what each stresses
+    Scenes {
+        /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
+        #[arg(long)]
+        generate: Option<PathBuf>,
+    },
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Reference {
+            opts,
+            spp,
+            out,
+            exposure,
+        } => irad::commands::reference(&opts, spp, &out, exposure).map(|_| ()),
+        Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

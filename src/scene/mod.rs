@@ -1,0 +1,274 @@
+//! Stage 1: the scene. A [`Scene`] is what a glTF file describes (meshes, materials, nodes,
+//! a camera, animations); [`Scene::at`] evaluates it at a time into a [`Frame`]: world-space
+//! triangles, the camera and the emitters.
+
+pub mod anim;
+pub mod builtin;
+pub mod camera;
+pub mod load;
+
+use glam::{Mat4, Quat, Vec3};
+use std::sync::Arc;
+
+pub use anim::{Channel, Interpolation, Property};
+pub use camera::Camera;
+
+/// A Lambertian material: albedo `rho` and emitted radiance `Le` (front face only).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub albedo: Vec3,
+    pub emission: Vec3,
+}
+
+/// One triangle list with one material, in its node's local space.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<u32>,
+    pub material: usize,
+}
+
+/// A node's local transform.
+#[derive(Clone, Copy, Debug)]
+pub enum Local {
+    Matrix(Mat4),
+    Trs {
+        translation: Vec3,
+        rotation: Quat,
+        scale: Vec3,
+    },
+}
+
+impl Local {
+    pub fn matrix(&self) -> Mat4 {
+        match *self {
+            Local::Matrix(m) => m,
+            Local::Trs {
+                translation,
+                rotation,
+                scale,
+            } => Mat4::from_scale_rotation_translation(scale, rotation, translation),
+        }
+    }
+}
+
+/// A perspective camera as the file gives it (it looks down its node's -Z, up +Y).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraDef {
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+}
+
+#[derive(Clone, Debug)]
+pub struct Node {
+    pub name: String,
+    pub local: Local,
+    pub children: Vec<usize>,
+    pub mesh: Option<usize>,
+    pub camera: Option<CameraDef>,
+}
+
+/// A scene as loaded: static description plus animation channels.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub materials: Arc<Vec<Material>>,
+    /// Meshes, each a list of triangle primitives.
+    pub meshes: Vec<Vec<Primitive>>,
+    pub nodes: Vec<Node>,
+    pub roots: Vec<usize>,
+    /// The node carrying the camera in use, if the file has one.
+    pub camera_node: Option<usize>,
+    /// A framing camera used when the file has none.
+    pub default_camera: Camera,
+    pub channels: Vec<Channel>,
+    /// Warnings raised while loading (one per kind of thing ignored).
+    pub warnings: Vec<String>,
+}
+
+/// Emissive triangles of a frame, with a CDF for choosing one in proportion to power.
+#[derive(Clone, Debug, Default)]
+pub struct Emitters {
+    /// Triangle indices into the frame.
+    pub tris: Vec<u32>,
+    /// Power of each emitter triangle (RGB watts): `Le * pi * area`.
+    pub power: Vec<Vec3>,
+    /// Cumulative luminance power, normalized to end at 1.
+    pub cdf: Vec<f32>,
+    /// Total RGB power of all emitters.
+    pub total_power: Vec3,
+}
+
+impl Emitters {
+    /// Picks an emitter by a uniform number: (index into `tris`, probability).
+    pub fn pick(&self, u: f32) -> (usize, f32) {
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .min(self.cdf.len() - 1);
+        (i, self.prob(i))
+    }
+
+    /// Probability of picking emitter `i`.
+    pub fn prob(&self, i: usize) -> f32 {
+        let prev = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        self.cdf[i] - prev
+    }
+}
+
+/// The scene evaluated at one time: everything the frame's stages need.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub time: f32,
+    /// World-space triangles, in an order stable over time (same index, same surface).
+    pub tris: Vec<[Vec3; 3]>,
+    pub tri_material: Vec<u32>,
+    /// Unit geometric normals (from the winding, counter-clockwise front).
+    pub normals: Vec<Vec3>,
+    pub areas: Vec<f32>,
+    pub materials: Arc<Vec<Material>>,
+    pub camera: Camera,
+    pub emitters: Emitters,
+    /// For each triangle, its index in `emitters.tris`, or `u32::MAX`.
+    pub emitter_of_tri: Vec<u32>,
+}
+
+impl Frame {
+    pub fn albedo(&self, tri: usize) -> Vec3 {
+        self.materials[self.tri_material[tri] as usize].albedo
+    }
+    pub fn emission(&self, tri: usize) -> Vec3 {
+        self.materials[self.tri_material[tri] as usize].emission
+    }
+    /// A point on a triangle from barycentrics (b1, b2).
+    pub fn point(&self, tri: usize, b1: f32, b2: f32) -> Vec3 {
+        let [a, b, c] = self.tris[tri];
+        a * (1.0 - b1 - b2) + b * b1 + c * b2
+    }
+    /// Axis-aligned bounds of all triangles.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        bounds(self.tris.iter().flatten().copied())
+    }
+}
+
+pub(crate) fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    points.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p), hi.max(p))
+    })
+}
+
+impl Scene {
+    /// Length of the animation in seconds (0 for a still scene).
+    pub fn duration(&self) -> f32 {
+        self.channels
+            .iter()
+            .filter_map(|c| c.times.last().copied())
+            .fold(0.0, f32::max)
+    }
+
+    /// Local transforms of all nodes at time `t`.
+    fn locals_at(&self, t: f32) -> Vec<Mat4> {
+        let mut trs: Vec<Local> = self.nodes.iter().map(|n| n.local).collect();
+        for ch in &self.channels {
+            if let Local::Trs {
+                translation,
+                rotation,
+                scale,
+            } = &mut trs[ch.node]
+            {
+                match ch.sample(t) {
+                    anim::Value::Translation(v) => *translation = v,
+                    anim::Value::Rotation(q) => *rotation = q,
+                    anim::Value::Scale(v) => *scale = v,
+                }
+            }
+        }
+        trs.iter().map(Local::matrix).collect()
+    }
+
+    /// World matrices of all nodes at time `t` (nodes not reached from a root stay identity).
+    pub fn world_matrices(&self, t: f32) -> Vec<Mat4> {
+        let locals = self.locals_at(t);
+        let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
+        let mut stack: Vec<(usize, Mat4)> =
+            self.roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
+        while let Some((n, parent)) = stack.pop() {
+            world[n] = parent * locals[n];
+            for &c in &self.nodes[n].children {
+                stack.push((c, world[n]));
+            }
+        }
+        world
+    }
+
+    /// Evaluates the scene at time `t` (seconds).
+    pub fn at(&self, t: f32) -> Frame {
+        let world = self.world_matrices(t);
+        let mut tris = Vec::new();
+        let mut tri_material = Vec::new();
+        let mut order = Vec::new();
+        let mut stack: Vec<usize> = self.roots.iter().rev().copied().collect();
+        while let Some(n) = stack.pop() {
+            order.push(n);
+            stack.extend(self.nodes[n].children.iter().rev());
+        }
+        for n in order {
+            let Some(mesh) = self.nodes[n].mesh else {
+                continue;
+            };
+            let m = world[n];
+            for prim in &self.meshes[mesh] {
+                let p: Vec<Vec3> = prim
+                    .positions
+                    .iter()
+                    .map(|&p| m.transform_point3(p))
+                    .collect();
+                for idx in prim.indices.chunks_exact(3) {
+                    tris.push([p[idx[0] as usize], p[idx[1] as usize], p[idx[2] as usize]]);
+                    tri_material.push(prim.material as u32);
+                }
+            }
+        }
+        let mut normals = Vec::with_capacity(tris.len());
+        let mut areas = Vec::with_capacity(tris.len());
+        for [a, b, c] in &tris {
+            let cr = (*b - *a).cross(*c - *a);
+            areas.push(0.5 * cr.length());
+            normals.push(cr.normalize_or_zero());
+        }
+        let mut emitters = Emitters::default();
+        let mut emitter_of_tri = vec![u32::MAX; tris.len()];
+        let mut acc = 0.0f32;
+        for (i, &mat) in tri_material.iter().enumerate() {
+            let le = self.materials[mat as usize].emission;
+            if le.max_element() > 0.0 && areas[i] > 0.0 {
+                let power = le * std::f32::consts::PI * areas[i];
+                emitter_of_tri[i] = emitters.tris.len() as u32;
+                emitters.tris.push(i as u32);
+                emitters.power.push(power);
+                emitters.total_power += power;
+                acc += crate::math::luminance(power).max(1e-20);
+                emitters.cdf.push(acc);
+            }
+        }
+        for c in &mut emitters.cdf {
+            *c /= acc;
+        }
+        let camera = match self.camera_node {
+            Some(n) => Camera::from_world(world[n], self.nodes[n].camera.map_or(0.7, |c| c.yfov)),
+            None => self.default_camera,
+        };
+        Frame {
+            time: t,
+            tris,
+            tri_material,
+            normals,
+            areas,
+            materials: self.materials.clone(),
+            camera,
+            emitters,
+            emitter_of_tri,
+        }
+    }
+}
