@@ -135,3 +135,218 @@ pub fn scenes(generate: Option<&Path>) -> Result<()> {
     }
     Ok(())
 }
+
+/// `irad info`: the adapters found and the one irad would choose.
+pub fn info(backend: crate::gpu::BackendChoice) -> Result<()> {
+    let list = crate::gpu::adapters(backend);
+    if list.is_empty() {
+        println!("no adapters found");
+    }
+    for (a, usable) in &list {
+        println!("{} {a}", if *usable { "usable " } else { "no     " });
+    }
+    let gpu = crate::gpu::Gpu::new(backend)?;
+    println!("chosen: {}", gpu.adapter);
+    let l = &gpu.limits;
+    println!(
+        "limits: storage buffer {} MiB, 2D texture {}, array layers {}",
+        l.max_storage_buffer_binding_size >> 20,
+        l.max_texture_dimension_2d,
+        l.max_texture_array_layers
+    );
+    Ok(())
+}
+
+/// The GPU renderer's options.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RenderOpts {
+    #[command(flatten)]
+    pub scene: SceneOpts,
+    /// VPL slots per frame
+    #[arg(long, default_value_t = 256)]
+    pub vpls: u32,
+    /// Distance clamp dmin of the VPL contribution, in scene units (0: off); default 2% of
+    /// the scene's bounding-box diagonal
+    #[arg(long)]
+    pub clamp: Option<f32>,
+    /// VPL sampler
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub sampler: crate::frame::SamplerKind,
+    /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
+    #[arg(long, value_enum, default_value = "auto")]
+    pub backend: crate::gpu::BackendChoice,
+    /// Output folder
+    #[arg(long, default_value = "out")]
+    pub out: std::path::PathBuf,
+    /// Exposure of the PNG previews (EXR files are linear, unscaled)
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// ISM tile side in texels (power of two)
+    #[arg(long, default_value_t = 64)]
+    pub ism_size: u32,
+    /// Points each VPL splats into its ISM
+    #[arg(long, default_value_t = 4096)]
+    pub ism_points: u32,
+    /// Pull-push levels of the ISMs (holes up to 2^levels texels are filled)
+    #[arg(long, default_value_t = 3)]
+    pub pull_levels: u32,
+    /// ISM depth bias, in texel footprints
+    #[arg(long, default_value_t = 1.5)]
+    pub ism_bias: f32,
+    /// Emitter samples for direct light (each a shadow hemicube)
+    #[arg(long, default_value_t = 32)]
+    pub light_samples: u32,
+    /// Shadow hemicube face side in texels
+    #[arg(long, default_value_t = 256)]
+    pub shadow_size: u32,
+}
+
+impl RenderOpts {
+    /// The GPU renderer's configuration.
+    pub fn config(&self) -> crate::gpu::RendererConfig {
+        crate::gpu::RendererConfig {
+            width: self.scene.size.width,
+            height: self.scene.size.height,
+            max_vpls: self.vpls,
+            ism_size: self.ism_size,
+            points_per_vpl: self.ism_points,
+            num_points: self
+                .ism_points
+                .saturating_mul(16)
+                .clamp(1 << 16, 1 << 22)
+                .max(self.ism_points),
+            pull_levels: self.pull_levels,
+            ism_bias: self.ism_bias,
+            light_samples: self.light_samples,
+            shadow_size: self.shadow_size,
+            shadow_bias: 1.5,
+            exposure: self.exposure,
+            seed: self.scene.seed,
+        }
+    }
+
+    /// The sequence settings for `scene`.
+    pub fn settings(&self, scene: &Scene) -> Result<crate::frame::Settings> {
+        let dmin = match self.clamp {
+            Some(c) if c.is_finite() && c >= 0.0 => c,
+            Some(c) => bail!("--clamp {c} must be a distance >= 0"),
+            None => {
+                let (lo, hi) = scene.at(0.0).bounds();
+                0.02 * (hi - lo).length()
+            }
+        };
+        Ok(crate::frame::Settings {
+            sampler: self.sampler,
+            vpls: self.vpls,
+            dmin,
+            seed: self.scene.seed,
+            fps: self.scene.fps,
+        })
+    }
+}
+
+#[derive(Serialize)]
+struct RenderRun<'a> {
+    command: &'static str,
+    scene: &'a str,
+    adapter: crate::gpu::AdapterDesc,
+    settings: &'a crate::frame::Settings,
+    gpu: &'a crate::gpu::RendererConfig,
+    frames: Vec<RenderFrame>,
+}
+
+#[derive(Serialize)]
+struct RenderFrame {
+    frame: u32,
+    time: f32,
+    seconds: f64,
+    stages: std::collections::BTreeMap<String, f64>,
+    stage_order: Vec<&'static str>,
+    vpls: usize,
+    paths: u64,
+    replaced: f32,
+    mean_rgb: [f32; 3],
+}
+
+/// `irad render`: frames, an animated preview and the run record.
+pub fn render(opts: &RenderOpts) -> Result<()> {
+    opts.scene.validate()?;
+    if !(opts.exposure.is_finite() && opts.exposure > 0.0) {
+        bail!("--exposure {} must be > 0", opts.exposure);
+    }
+    let spec = opts.scene.scene_or("cornell-orbit");
+    let scene = load_scene(spec)?;
+    let settings = opts.settings(&scene)?;
+    let out = &opts.out;
+    report::prepare_out_dir(out)?;
+    let mut pipeline =
+        crate::frame::Pipeline::new(scene, settings.clone(), opts.config(), opts.backend)?;
+    eprintln!("adapter: {}", pipeline.renderer.gpu.adapter);
+    let mut record = RenderRun {
+        command: "render",
+        scene: spec,
+        adapter: pipeline.renderer.gpu.adapter.clone(),
+        settings: &settings,
+        gpu: &pipeline.renderer.config.clone(),
+        frames: Vec::new(),
+    };
+    let pb = report::progress(opts.scene.frames.len() as u64, "render");
+    let mut previews = Vec::new();
+    for f in opts.scene.frames.iter() {
+        let fo = pipeline.render_frame(f, false)?;
+        let stem = report::frame_stem(f);
+        fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
+        let (w, h) = (opts.scene.size.width, opts.scene.size.height);
+        let png = image::RgbImage::from_raw(w, h, fo.image.ldr.clone()).expect("w*h*3 bytes");
+        crate::image::atomic_write(&out.join(format!("{stem}.png")), |tmp| {
+            png.save_with_format(tmp, image::ImageFormat::Png)
+                .map_err(anyhow::Error::from)
+        })?;
+        previews.push(png);
+        record.frames.push(RenderFrame {
+            frame: f,
+            time: fo.time,
+            seconds: fo.seconds,
+            stages: fo.stages.iter().map(|(n, t)| (n.to_string(), *t)).collect(),
+            stage_order: fo.stages.iter().map(|(n, _)| *n).collect(),
+            vpls: fo.selection.vpls.len(),
+            paths: fo.selection.paths,
+            replaced: fo.selection.replaced,
+            mean_rgb: fo.image.hdr.mean().to_array(),
+        });
+        report::write_json(&out.join("run.json"), &record)?;
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    report::write_gif(&out.join("preview.gif"), &previews, opts.scene.fps)?;
+    let n = record.frames.len() as f64;
+    let mean = |name: &str| {
+        record
+            .frames
+            .iter()
+            .map(|f| f.stages.get(name).copied().unwrap_or(0.0))
+            .sum::<f64>()
+            / n
+    };
+    println!("adapter: {}", record.adapter);
+    println!(
+        "{} frames of {} at {}, {} VPLs, sampler {:?}",
+        record.frames.len(),
+        spec,
+        opts.scene.size,
+        opts.vpls,
+        settings.sampler
+    );
+    println!(
+        "mean seconds per frame: {:.3}",
+        record.frames.iter().map(|f| f.seconds).sum::<f64>() / n
+    );
+    for name in &record.frames[0].stage_order {
+        println!("  {name:14} {:8.2} ms", mean(name) * 1e3);
+    }
+    println!(
+        "wrote {}/frame_*.exr, frame_*.png, preview.gif, run.json",
+        out.display()
+    );
+    Ok(())
+}

@@ -4,8 +4,11 @@
 
 pub mod cli;
 pub mod commands;
+pub mod frame;
+pub mod gpu;
 pub mod image;
 pub mod math;
+pub mod metrics;
 pub mod reference;
 pub mod report;
 pub mod scene;

@@ -26,6 +26,13 @@ enum Command {
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
     },
+    /// Render frames on the GPU by instant radiosity (frames, preview.gif, run.json)
+    Render(irad::commands::RenderOpts),
+    /// Print the graphics adapters found and the one irad chooses
+    Info {
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: irad::gpu::BackendChoice,
+    },
     /// List the built-in scenes and what each stresses
     Scenes {
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
@@ -43,6 +50,8 @@ fn main() {
             out,
             exposure,
         } => irad::commands::reference(&opts, spp, &out, exposure).map(|_| ()),
+        Command::Render(opts) => irad::commands::render(&opts),
+        Command::Info { backend } => irad::commands::info(backend),
         Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
     };
     if let Err(e) = result {

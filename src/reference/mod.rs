@@ -2,6 +2,8 @@
 //! sampling (power heuristic) on the emitters, Russian roulette, rayon across rows.
 //! It is the ground truth every metric is held to.
 
+pub mod twin;
+
 use crate::image::Hdr;
 use crate::math::{cosine_hemisphere, rng, triangle_barycentrics};
 use crate::scene::Frame;

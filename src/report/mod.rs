@@ -49,3 +49,19 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
     pb.set_message(what.to_string());
     pb
 }
+
+/// Writes an animated GIF of 8-bit RGB frames at `fps`.
+pub fn write_gif(path: &Path, frames: &[image::RgbImage], fps: f32) -> Result<()> {
+    use image::codecs::gif::{GifEncoder, Repeat};
+    crate::image::atomic_write(path, |tmp| {
+        let file = std::fs::File::create(tmp)?;
+        let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
+        enc.set_repeat(Repeat::Infinite)?;
+        let delay = image::Delay::from_numer_denom_ms(1000, fps.max(1.0) as u32);
+        for f in frames {
+            let rgba = image::DynamicImage::ImageRgb8(f.clone()).to_rgba8();
+            enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
+        }
+        Ok(())
+    })
+}

@@ -272,3 +272,39 @@ impl Scene {
         }
     }
 }
+
+/// A point sample on the emitters for direct light: position, unit normal (the emitting
+/// side) and `Le / (pdf_area * count)`, so that direct radiance at x is the sum over samples of
+/// `rho_x/pi * radiance * cos_l cos_x / d^2 * V`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmitterSample {
+    pub position: Vec3,
+    pub normal: Vec3,
+    pub radiance: Vec3,
+}
+
+impl Frame {
+    /// `count` emitter samples, stratified over the power CDF, from a stream that depends on
+    /// the seed only (so a still scene's direct light does not change from frame to frame).
+    pub fn emitter_samples(&self, seed: u64, count: usize) -> Vec<EmitterSample> {
+        use rand::Rng;
+        let em = &self.emitters;
+        if em.tris.is_empty() {
+            return Vec::new();
+        }
+        let mut r = crate::math::rng(&[seed, 0xd1ec7]);
+        (0..count)
+            .map(|j| {
+                let u = ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7);
+                let (e, p_e) = em.pick(u);
+                let tri = em.tris[e] as usize;
+                let b = crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
+                EmitterSample {
+                    position: self.point(tri, b.x, b.y),
+                    normal: self.normals[tri],
+                    radiance: self.emission(tri) * (self.areas[tri] / (p_e * count as f32)),
+                }
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,84 @@
+// Shared by every pass (prepended by the Rust side).
+
+const PI: f32 = 3.14159265358979;
+
+// One scene triangle: vertices, unit geometric normal, albedo and emitted radiance.
+struct Tri {
+    v0: vec4f,
+    v1: vec4f,
+    v2: vec4f,
+    n: vec4f,
+    albedo: vec4f,
+    emission: vec4f,
+}
+
+// A VPL: position, unit normal (facing where its light arrived from), and its weighted flux
+// `power * albedo_y * weight` (RGB).
+struct Vpl {
+    pos: vec4f,
+    normal: vec4f,
+    flux: vec4f,
+}
+
+// An emitter sample for direct light: position, unit normal, and `Le / (pdf * count)`.
+struct LightSample {
+    pos: vec4f,
+    normal: vec4f,
+    radiance: vec4f,
+}
+
+// Frame constants, the same buffer for every pass.
+struct Params {
+    width: u32,
+    height: u32,
+    num_vpls: u32,
+    ism_size: u32,
+    points_per_vpl: u32,
+    num_points: u32,
+    num_light_samples: u32,
+    shadow_size: u32,
+    far: f32,
+    dmin: f32,
+    exposure: f32,
+    ism_bias: f32,
+    cam_pos: vec4f,
+    shadow_bias: f32,
+    near: f32,
+    pull_levels: u32,
+    pad: u32,
+}
+
+// Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.
+fn basis_t(n: vec3f) -> vec3f {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    return vec3f(1.0 + s * n.x * n.x * a, s * n.x * n.y * a, -s * n.x);
+}
+fn basis_b(n: vec3f) -> vec3f {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    return vec3f(n.x * n.y * a, s + n.y * n.y * a, -n.y);
+}
+
+// Paraboloid texel of unit direction `d` (already known to have dot(d, n) > 0) around `n`.
+fn paraboloid_texel(d: vec3f, n: vec3f, size: u32) -> u32 {
+    let lx = dot(d, basis_t(n));
+    let ly = dot(d, basis_b(n));
+    let lz = dot(d, n);
+    let uv = vec2f(lx, ly) / (1.0 + lz);
+    let fs = f32(size);
+    let t = clamp(vec2i(floor((uv * 0.5 + 0.5) * fs)), vec2i(0), vec2i(i32(size) - 1));
+    return u32(t.y) * size + u32(t.x);
+}
+
+// The G-buffer texel: xyz world position bits, w = triangle index + 1 (0: nothing hit).
+fn gbuffer_x(g: vec4u) -> vec3f {
+    return bitcast<vec3f>(g.xyz);
+}
+
+fn srgb_oetf(v: f32) -> f32 {
+    if v <= 0.0031308 {
+        return 12.92 * v;
+    }
+    return 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+}

@@ -1,0 +1,50 @@
+// Gather: every pixel sums the clamped contribution of every VPL, with ISM visibility
+// (a depth bias scaled by the tile's texel footprint).
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<storage, read> tris: array<Tri>;
+@group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(3) var<storage, read> ism: array<f32>;
+@group(0) @binding(4) var gbuf: texture_2d<u32>;
+@group(0) @binding(5) var<storage, read_write> indirect: array<vec4f>;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3u) {
+    if gid.x >= P.width || gid.y >= P.height {
+        return;
+    }
+    let g = textureLoad(gbuf, vec2i(gid.xy), 0);
+    let pix = gid.y * P.width + gid.x;
+    if g.w == 0u {
+        indirect[pix] = vec4f(0.0);
+        return;
+    }
+    let tri = tris[g.w - 1u];
+    let x = gbuffer_x(g);
+    var n = tri.n.xyz;
+    if dot(n, P.cam_pos.xyz - x) < 0.0 {
+        n = -n;
+    }
+    let texel_angle = 4.0 / f32(P.ism_size);
+    var sum = vec3f(0.0);
+    for (var i = 0u; i < P.num_vpls; i++) {
+        let v = vpls[i];
+        let d = v.pos.xyz - x;
+        let d2 = dot(d, d);
+        let dist = sqrt(d2);
+        let w = d / dist;
+        let cos_x = dot(n, w);
+        let cos_y = -dot(v.normal.xyz, w);
+        if cos_x <= 0.0 || cos_y <= 0.0 {
+            continue;
+        }
+        let stored = ism[i * P.ism_size * P.ism_size + paraboloid_texel(-w, v.normal.xyz, P.ism_size)];
+        let tan_x = min(sqrt(max(1.0 - cos_x * cos_x, 0.0)) / cos_x, 4.0);
+        let bias = P.ism_bias * dist * texel_angle * (1.0 + tan_x) / P.far;
+        if stored >= 0.0 && dist / P.far > stored + bias {
+            continue;
+        }
+        sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, P.dmin * P.dmin)));
+    }
+    indirect[pix] = vec4f(sum * tri.albedo.xyz, 1.0);
+}

@@ -1,0 +1,28 @@
+// G-buffer: the camera's view rasterized; each pixel keeps its world position and triangle
+// (see `gbuffer_x` and `gbuffer_tri` in common.wgsl).
+
+struct Camera {
+    view_proj: mat4x4f,
+}
+@group(0) @binding(0) var<uniform> cam: Camera;
+
+struct VsOut {
+    @builtin(position) clip: vec4f,
+    @location(0) world: vec3f,
+    @location(1) @interpolate(flat) tri: u32,
+}
+
+@vertex
+fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
+    var o: VsOut;
+    o.clip = cam.view_proj * vec4f(pos, 1.0);
+    o.world = pos;
+    o.tri = tri;
+    return o;
+}
+
+// Integer target (renderable everywhere, GL included): position bits and triangle + 1.
+@fragment
+fn fs(i: VsOut) -> @location(0) vec4u {
+    return vec4u(bitcast<vec3u>(i.world), i.tri + 1u);
+}

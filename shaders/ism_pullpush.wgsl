@@ -1,0 +1,72 @@
+// Pull-push hole filling within each ISM tile. The pyramid holds normalized depths, -1 for a
+// hole. `decode` turns the splat atlas into level 0; `pull` averages the valid children into
+// the next coarser level; `push` fills holes of a level from its (already filled) parent.
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<storage, read> atlas: array<u32>;
+@group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
+
+struct Level {
+    level: u32,
+    offset: u32,        // start of this level in the pyramid
+    parent_offset: u32, // start of the coarser level (pull writes it, push reads it)
+    size: u32,          // tile side at this level
+}
+@group(1) @binding(0) var<uniform> L: Level;
+
+@compute @workgroup_size(64)
+fn decode(@builtin(global_invocation_id) gid: vec3u) {
+    let n = P.num_vpls * P.ism_size * P.ism_size;
+    let i = gid.x + gid.y * 65535u * 64u;
+    if i >= n {
+        return;
+    }
+    let e = atlas[i];
+    pyramid[i] = select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
+}
+
+// One invocation per texel of the coarser level `L.size / 2`.
+@compute @workgroup_size(64)
+fn pull(@builtin(global_invocation_id) gid: vec3u) {
+    let half = L.size / 2u;
+    let per_tile = half * half;
+    let i = gid.x + gid.y * 65535u * 64u;
+    if i >= P.num_vpls * per_tile {
+        return;
+    }
+    let tile = i / per_tile;
+    let k = i % per_tile;
+    let x = (k % half) * 2u;
+    let y = (k / half) * 2u;
+    let base = L.offset + tile * L.size * L.size;
+    var sum = 0.0;
+    var count = 0.0;
+    for (var dy = 0u; dy < 2u; dy++) {
+        for (var dx = 0u; dx < 2u; dx++) {
+            let v = pyramid[base + (y + dy) * L.size + x + dx];
+            if v >= 0.0 {
+                sum += v;
+                count += 1.0;
+            }
+        }
+    }
+    pyramid[L.parent_offset + i] = select(-1.0, sum / max(count, 1.0), count > 0.0);
+}
+
+// One invocation per texel of level `L.size`.
+@compute @workgroup_size(64)
+fn push(@builtin(global_invocation_id) gid: vec3u) {
+    let per_tile = L.size * L.size;
+    let i = gid.x + gid.y * 65535u * 64u;
+    if i >= P.num_vpls * per_tile {
+        return;
+    }
+    if pyramid[L.offset + i] >= 0.0 {
+        return;
+    }
+    let tile = i / per_tile;
+    let k = i % per_tile;
+    let half = L.size / 2u;
+    let parent = L.parent_offset + tile * half * half + ((k / L.size) / 2u) * half + (k % L.size) / 2u;
+    pyramid[L.offset + i] = pyramid[parent];
+}

@@ -1,0 +1,115 @@
+//! One frame, in order (DESIGN.md "One frame, in order"): the whole flow in [`Pipeline::render_frame`].
+
+use crate::gpu::{BackendChoice, Gpu, GpuFrame, RenderedFrame, Renderer, RendererConfig};
+use crate::scene::Scene;
+use crate::trace::Tracer;
+use crate::vpl::sampler::{self, Selection};
+use anyhow::Result;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which sampler picks the frame's VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// Keller's instant radiosity: fresh light paths every frame
+    Uniform,
+}
+
+/// What a sequence is rendered with, besides the GPU sizes.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    pub sampler: SamplerKind,
+    pub vpls: u32,
+    /// Distance clamp of the VPL contribution, in scene units.
+    pub dmin: f32,
+    pub seed: u64,
+    pub fps: f32,
+}
+
+/// A rendered frame with its record.
+pub struct FrameOutput {
+    pub index: u32,
+    pub time: f32,
+    pub image: RenderedFrame,
+    pub selection: Selection,
+    /// Seconds per stage, CPU stages then GPU passes, in order.
+    pub stages: Vec<(&'static str, f64)>,
+    pub seconds: f64,
+}
+
+/// The renderer of one sequence: scene, ray tracer, sampler state and GPU passes.
+pub struct Pipeline {
+    pub scene: Scene,
+    pub settings: Settings,
+    pub renderer: Renderer,
+    tracer: Tracer,
+}
+
+impl Pipeline {
+    pub fn new(
+        scene: Scene,
+        settings: Settings,
+        config: RendererConfig,
+        backend: BackendChoice,
+    ) -> Result<Pipeline> {
+        let gpu = Gpu::new(backend)?;
+        let frame0 = scene.at(0.0);
+        let renderer = Renderer::new(gpu, config, &frame0)?;
+        let tracer = Tracer::new(&frame0);
+        Ok(Pipeline {
+            scene,
+            settings,
+            renderer,
+            tracer,
+        })
+    }
+
+    /// Renders frame `f` (at time f / fps). With `components`, the direct and indirect
+    /// images come back too.
+    pub fn render_frame(&mut self, f: u32, components: bool) -> Result<FrameOutput> {
+        let s = &self.settings;
+        let start = Instant::now();
+        let mut stages = Vec::new();
+        let mut lap = |name: &'static str, t: &mut Instant| {
+            stages.push((name, t.elapsed().as_secs_f64()));
+            *t = Instant::now();
+        };
+        let mut t = Instant::now();
+        // 1. The scene at time t.
+        let frame = self.scene.at(f as f32 / s.fps);
+        lap("scene", &mut t);
+        // 2. Ray tracing: rebuild the BVH only if the geometry moved.
+        self.tracer.update(&frame);
+        lap("bvh", &mut t);
+        // 3-6. Light paths and the sampler: the frame's VPLs and weights.
+        let selection = match s.sampler {
+            SamplerKind::Uniform => {
+                sampler::uniform(&frame, &self.tracer, s.seed, f as u64, s.vpls as usize)
+            }
+        };
+        lap("vpls", &mut t);
+        // Emitter samples for direct light (a fixed stream: still scenes get still direct light).
+        let lights = frame.emitter_samples(s.seed, self.renderer.config.light_samples as usize);
+        lap("light_samples", &mut t);
+        // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
+        let image = self.renderer.render(
+            &GpuFrame {
+                frame: &frame,
+                vpls: &selection.shaded,
+                lights: &lights,
+                dmin: s.dmin,
+            },
+            components,
+        )?;
+        stages.extend(image.timings.iter().map(|&(n, t)| (n, t)));
+        Ok(FrameOutput {
+            index: f,
+            time: frame.time,
+            image,
+            selection,
+            stages,
+            seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+}

@@ -1,0 +1,250 @@
+//! Imperfect shadow maps (`shaders/ism_splat.wgsl`, `shaders/ism_pullpush.wgsl`).
+//!
+//! The point set: points on the surfaces in proportion to area, kept as (triangle,
+//! barycentrics) so they follow moving geometry, in random order. VPL slot s splats the
+//! `points_per_vpl` points starting at its own random offset, so each slot has its own random
+//! subset, and a slot that keeps its VPL keeps its subset. Each splat writes the nearest depth
+//! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
+//! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
+
+use super::{dispatch, groups_1d, storage_entry, uniform_entry, Gpu};
+use crate::math::{rng, triangle_barycentrics};
+use crate::scene::Frame;
+use glam::Vec2;
+use rand::Rng;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Point {
+    pub tri: u32,
+    pub b1: f32,
+    pub b2: f32,
+    pub pad: u32,
+}
+
+/// `count` points on `frame`'s surfaces in proportion to area, in random order.
+pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
+    let mut cdf = Vec::with_capacity(frame.areas.len());
+    let mut acc = 0.0f64;
+    for &a in &frame.areas {
+        acc += a as f64;
+        cdf.push(acc);
+    }
+    let mut r = rng(&[seed, 0x15a]);
+    (0..count)
+        .map(|_| {
+            let u = r.random::<f64>() * acc;
+            let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+            let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
+            Point {
+                tri: tri as u32,
+                b1: b.x,
+                b2: b.y,
+                pad: 0,
+            }
+        })
+        .collect()
+}
+
+/// The offset into the point set of slot `slot`'s subset (depends on the seed and slot only).
+pub fn slot_offset(seed: u64, slot: u32, num_points: u32) -> u32 {
+    (crate::math::stream_seed(&[seed, slot as u64, 0x5107]) % num_points as u64) as u32
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Level {
+    level: u32,
+    offset: u32,
+    parent_offset: u32,
+    size: u32,
+}
+
+pub struct Ism {
+    splat: wgpu::ComputePipeline,
+    decode: wgpu::ComputePipeline,
+    pull: wgpu::ComputePipeline,
+    push: wgpu::ComputePipeline,
+    splat_group: wgpu::BindGroup,
+    pp_group: wgpu::BindGroup,
+    level_groups: Vec<wgpu::BindGroup>,
+    atlas: wgpu::Buffer,
+    /// Level 0 of the pyramid is the filled atlas the gather reads.
+    pub pyramid: wgpu::Buffer,
+    size: u32,
+    levels: u32,
+    max_vpls: u32,
+}
+
+/// Bytes of the atlas for `max_vpls` tiles of `size`^2.
+pub fn atlas_bytes(max_vpls: u32, size: u32) -> u64 {
+    max_vpls as u64 * size as u64 * size as u64 * 4
+}
+
+impl Ism {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        gpu: &Gpu,
+        params: &wgpu::Buffer,
+        tris: &wgpu::Buffer,
+        points: &wgpu::Buffer,
+        vpls: &wgpu::Buffer,
+        offsets: &wgpu::Buffer,
+        max_vpls: u32,
+        size: u32,
+        levels: u32,
+    ) -> Self {
+        let levels = levels.min(size.trailing_zeros().saturating_sub(1));
+        let tile = |l: u32| max_vpls as u64 * ((size >> l) as u64).pow(2);
+        let offsets_l: Vec<u64> = (0..=levels + 1)
+            .scan(0u64, |acc, l| {
+                let o = *acc;
+                *acc += tile(l);
+                Some(o)
+            })
+            .collect();
+        let atlas = gpu.buffer(
+            "ism atlas",
+            atlas_bytes(max_vpls, size),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let pyramid = gpu.buffer(
+            "ism pyramid",
+            offsets_l[levels as usize + 1] * 4,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let m_splat = gpu.shader("ism_splat", include_str!("../../shaders/ism_splat.wgsl"));
+        let l_splat = gpu.layout(
+            "ism_splat",
+            &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
+                storage_entry(1, true),
+                storage_entry(2, true),
+                storage_entry(3, true),
+                storage_entry(4, true),
+                storage_entry(5, false),
+            ],
+        );
+        let splat = gpu.compute_pipeline("ism_splat", &m_splat, "main", &[&l_splat]);
+        let splat_group = gpu.bind(
+            "ism_splat",
+            &l_splat,
+            &[
+                params.as_entire_binding(),
+                tris.as_entire_binding(),
+                points.as_entire_binding(),
+                vpls.as_entire_binding(),
+                offsets.as_entire_binding(),
+                atlas.as_entire_binding(),
+            ],
+        );
+        let m_pp = gpu.shader(
+            "ism_pullpush",
+            include_str!("../../shaders/ism_pullpush.wgsl"),
+        );
+        let l_pp = gpu.layout(
+            "ism_pullpush",
+            &[
+                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
+                storage_entry(1, true),
+                storage_entry(2, false),
+            ],
+        );
+        let l_level = gpu.layout(
+            "ism level",
+            &[uniform_entry(0, wgpu::ShaderStages::COMPUTE, false)],
+        );
+        let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[&l_pp, &l_level]);
+        let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[&l_pp, &l_level]);
+        let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[&l_pp, &l_level]);
+        let pp_group = gpu.bind(
+            "ism_pullpush",
+            &l_pp,
+            &[
+                params.as_entire_binding(),
+                atlas.as_entire_binding(),
+                pyramid.as_entire_binding(),
+            ],
+        );
+        let level_groups = (0..=levels)
+            .map(|l| {
+                let u = gpu.buffer(
+                    "ism level",
+                    16,
+                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                );
+                let lv = Level {
+                    level: l,
+                    offset: offsets_l[l as usize] as u32,
+                    parent_offset: offsets_l[l as usize + 1] as u32,
+                    size: size >> l,
+                };
+                gpu.queue.write_buffer(&u, 0, bytemuck::bytes_of(&lv));
+                gpu.bind("ism level", &l_level, &[u.as_entire_binding()])
+            })
+            .collect();
+        Ism {
+            splat,
+            decode,
+            pull,
+            push,
+            splat_group,
+            pp_group,
+            level_groups,
+            atlas,
+            pyramid,
+            size,
+            levels,
+            max_vpls,
+        }
+    }
+
+    /// Clears the atlas and splats every slot's points.
+    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32, points_per_vpl: u32) {
+        debug_assert!(num_vpls <= self.max_vpls);
+        enc.clear_buffer(&self.atlas, 0, None);
+        if num_vpls > 0 {
+            dispatch(
+                enc,
+                "ism splat",
+                &self.splat,
+                &[&self.splat_group],
+                (points_per_vpl.div_ceil(64), num_vpls, 1),
+            );
+        }
+    }
+
+    /// Decodes the atlas into the pyramid and fills holes by pull-push.
+    pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32) {
+        let texels = |l: u32| num_vpls as u64 * ((self.size >> l) as u64).pow(2);
+        let g = |n: u64| {
+            let (x, y) = groups_1d(n);
+            (x, y, 1)
+        };
+        dispatch(
+            enc,
+            "ism decode",
+            &self.decode,
+            &[&self.pp_group, &self.level_groups[0]],
+            g(texels(0)),
+        );
+        for l in 0..self.levels {
+            dispatch(
+                enc,
+                "ism pull",
+                &self.pull,
+                &[&self.pp_group, &self.level_groups[l as usize]],
+                g(texels(l + 1)),
+            );
+        }
+        for l in (0..self.levels).rev() {
+            dispatch(
+                enc,
+                "ism push",
+                &self.push,
+                &[&self.pp_group, &self.level_groups[l as usize]],
+                g(texels(l)),
+            );
+        }
+    }
+}

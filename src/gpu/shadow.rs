@@ -1,0 +1,146 @@
+//! Shadow hemicubes (`shaders/shadow.wgsl`): for every emitter sample, five 90-degree faces
+//! (+n, +t, -t, +b, -b) rasterized from the triangles, storing distance to the sample. These
+//! are the accurate shadow maps of the direct light.
+
+use super::{gbuffer, Gpu};
+use glam::Vec3;
+
+pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+const STRIDE: u64 = 256;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Face {
+    pos: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
+    fwd: [f32; 4],
+    near: f32,
+    far: f32,
+    pad: [f32; 2],
+}
+
+/// (right, up, forward) of the five hemicube faces around `n`; must match `face_coords` in
+/// `shaders/direct.wgsl`.
+pub fn face_bases(n: Vec3) -> [(Vec3, Vec3, Vec3); 5] {
+    let (t, b) = crate::math::basis(n);
+    [(t, b, n), (b, n, t), (b, n, -t), (t, n, b), (t, n, -b)]
+}
+
+pub struct ShadowMaps {
+    pipeline: wgpu::RenderPipeline,
+    uniform: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    layers: Vec<wgpu::TextureView>,
+    pub array_view: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    pub size: u32,
+}
+
+impl ShadowMaps {
+    pub fn new(gpu: &Gpu, size: u32, samples: u32) -> Self {
+        let module = gpu.shader("shadow", include_str!("../../shaders/shadow.wgsl"));
+        let layout = gpu.layout(
+            "shadow",
+            &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX, true)],
+        );
+        let pipeline = gpu.raster_pipeline("shadow", &module, &layout, FORMAT);
+        let n = (samples * 5).max(1);
+        let uniform = gpu.buffer(
+            "shadow faces",
+            STRIDE * n as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let bind_group = gpu.bind(
+            "shadow",
+            &layout,
+            &[wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &uniform,
+                offset: 0,
+                size: wgpu::BufferSize::new(std::mem::size_of::<Face>() as u64),
+            })],
+        );
+        let tex = gbuffer::target(gpu, "shadow maps", size, size, n, FORMAT, true);
+        let layers = (0..n)
+            .map(|l| {
+                tex.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: l,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let array_view = tex.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let depth = gbuffer::target(
+            gpu,
+            "shadow depth",
+            size,
+            size,
+            1,
+            wgpu::TextureFormat::Depth32Float,
+            false,
+        )
+        .create_view(&Default::default());
+        ShadowMaps {
+            pipeline,
+            uniform,
+            bind_group,
+            layers,
+            array_view,
+            depth,
+            size,
+        }
+    }
+
+    /// Renders the hemicubes of `samples` (position, normal).
+    #[allow(clippy::too_many_arguments)]
+    pub fn encode(
+        &self,
+        gpu: &Gpu,
+        enc: &mut wgpu::CommandEncoder,
+        samples: &[(Vec3, Vec3)],
+        near: f32,
+        far: f32,
+        vertices: &wgpu::Buffer,
+        count: u32,
+    ) {
+        let mut bytes = vec![0u8; (STRIDE as usize) * samples.len() * 5];
+        for (j, &(p, n)) in samples.iter().enumerate() {
+            for (k, (r, u, f)) in face_bases(n).into_iter().enumerate() {
+                let face = Face {
+                    pos: p.extend(1.0).to_array(),
+                    right: r.extend(0.0).to_array(),
+                    up: u.extend(0.0).to_array(),
+                    fwd: f.extend(0.0).to_array(),
+                    near,
+                    far,
+                    pad: [0.0; 2],
+                };
+                let o = (j * 5 + k) * STRIDE as usize;
+                bytes[o..o + std::mem::size_of::<Face>()]
+                    .copy_from_slice(bytemuck::bytes_of(&face));
+            }
+        }
+        if bytes.is_empty() {
+            return;
+        }
+        gpu.queue.write_buffer(&self.uniform, 0, &bytes);
+        for l in 0..samples.len() * 5 {
+            gbuffer::raster(
+                enc,
+                "shadow face",
+                &self.pipeline,
+                &self.bind_group,
+                &[(l as u64 * STRIDE) as u32],
+                &self.layers[l],
+                &self.depth,
+                vertices,
+                count,
+            );
+        }
+    }
+}
