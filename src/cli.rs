@@ -92,8 +92,9 @@ pub struct SceneOpts {
     #[arg(long, default_value = "256x256")]
     pub size: Size,
     /// Frames: A..B (half-open) or a single frame N; frame f is at time f / fps
-    #[arg(long, default_value = "0..1")]
-    pub frames: Frames,
+    /// [default: render: the whole animation; others: 0]
+    #[arg(long)]
+    pub frames: Option<Frames>,
     /// Frames per second of the animation
     #[arg(long, default_value_t = 24.0)]
     pub fps: f32,
@@ -112,6 +113,17 @@ impl SceneOpts {
     /// The scene named, or the command's default.
     pub fn scene_or<'a>(&'a self, default: &'a str) -> &'a str {
         self.scene.as_deref().unwrap_or(default)
+    }
+    /// The frames named, or all frames of an animation of `duration` seconds (at least one).
+    pub fn frames_or_all(&self, duration: f32) -> Frames {
+        self.frames.unwrap_or(Frames {
+            start: 0,
+            end: ((duration * self.fps).round() as u32).max(1),
+        })
+    }
+    /// The frames named, or frame 0.
+    pub fn frames_or_first(&self) -> Frames {
+        self.frames.unwrap_or(Frames { start: 0, end: 1 })
     }
     pub fn time(&self, f: u32) -> f32 {
         f as f32 / self.fps

@@ -56,7 +56,7 @@ pub fn reference(opts: &SceneOpts, spp: u32, out: &Path, exposure: f32) -> Resul
         seed: opts.seed,
     };
     let pb = report::progress(
-        opts.frames.len() as u64 * opts.size.height as u64,
+        opts.frames_or_first().len() as u64 * opts.size.height as u64,
         "reference",
     );
     let mut record = ReferenceRun {
@@ -72,7 +72,7 @@ pub fn reference(opts: &SceneOpts, spp: u32, out: &Path, exposure: f32) -> Resul
     };
     let mut tracer: Option<Tracer> = None;
     let mut images = Vec::new();
-    for f in opts.frames.iter() {
+    for f in opts.frames_or_first().iter() {
         let start = Instant::now();
         let frame = scene.at(opts.time(f));
         match &mut tracer {
@@ -278,9 +278,10 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
     let scene = load_scene(spec)?;
     let settings = opts.settings(&scene)?;
     let out = &opts.out;
-    report::prepare_out_dir(out)?;
+    // Sizes are checked against the adapter, and the folder for writing, before any frame.
     let mut pipeline =
         crate::frame::Pipeline::new(scene, settings.clone(), opts.config(), opts.backend)?;
+    report::prepare_out_dir(out)?;
     eprintln!("adapter: {}", pipeline.renderer.gpu.adapter);
     let mut record = RenderRun {
         command: "render",
@@ -290,9 +291,10 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
         gpu: &pipeline.renderer.config.clone(),
         frames: Vec::new(),
     };
-    let pb = report::progress(opts.scene.frames.len() as u64, "render");
+    let frames = opts.scene.frames_or_all(pipeline.scene.duration());
+    let pb = report::progress(frames.len() as u64, "render");
     let mut previews = Vec::new();
-    for f in opts.scene.frames.iter() {
+    for f in frames.iter() {
         let fo = pipeline.render_frame(f, false)?;
         let stem = report::frame_stem(f);
         fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
@@ -348,5 +350,105 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
         "wrote {}/frame_*.exr, frame_*.png, preview.gif, run.json",
         out.display()
     );
+    Ok(())
+}
+
+/// One bench configuration: VPL count and image size, written `256@256x256`.
+#[derive(Clone, Copy, Debug)]
+pub struct BenchConfig {
+    pub vpls: u32,
+    pub size: crate::cli::Size,
+}
+
+impl std::str::FromStr for BenchConfig {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (v, size) = s
+            .split_once('@')
+            .ok_or_else(|| format!("'{s}' is not VPLS@WxH (e.g. 256@256x256)"))?;
+        Ok(BenchConfig {
+            vpls: v.parse().map_err(|_| format!("'{v}' is not a VPL count"))?,
+            size: size.parse()?,
+        })
+    }
+}
+
+#[derive(Serialize)]
+struct BenchRow {
+    vpls: u32,
+    size: String,
+    frames: u32,
+    seconds_per_frame: f64,
+    stages: Vec<(&'static str, f64)>,
+}
+
+/// `irad bench`: time per stage of whole frames, averaged after one warm-up frame.
+pub fn bench(opts: &RenderOpts, configs: &[BenchConfig], frames: u32) -> Result<()> {
+    opts.scene.validate()?;
+    let spec = opts.scene.scene_or("cornell");
+    let scene = load_scene(spec)?;
+    let mut rows = Vec::new();
+    let mut adapter = None;
+    let pb = report::progress(configs.len() as u64 * (frames as u64 + 1), "bench");
+    for c in configs {
+        let mut o = opts.clone();
+        o.vpls = c.vpls;
+        o.scene.size = c.size;
+        let settings = o.settings(&scene)?;
+        let mut p = crate::frame::Pipeline::new(scene.clone(), settings, o.config(), o.backend)?;
+        adapter = Some(p.renderer.gpu.adapter.clone());
+        p.render_frame(0, false)?;
+        pb.inc(1);
+        let mut sum: Vec<(&'static str, f64)> = Vec::new();
+        let mut total = 0.0;
+        for f in 0..frames {
+            let fo = p.render_frame(f, false)?;
+            if sum.is_empty() {
+                sum = fo.stages.iter().map(|&(n, _)| (n, 0.0)).collect();
+            }
+            for (acc, (_, t)) in sum.iter_mut().zip(&fo.stages) {
+                acc.1 += t;
+            }
+            total += fo.seconds;
+            pb.inc(1);
+        }
+        rows.push(BenchRow {
+            vpls: c.vpls,
+            size: c.size.to_string(),
+            frames,
+            seconds_per_frame: total / frames as f64,
+            stages: sum
+                .into_iter()
+                .map(|(n, t)| (n, t / frames as f64))
+                .collect(),
+        });
+    }
+    pb.finish_and_clear();
+    let Some(adapter) = adapter else {
+        bail!("no bench configuration given")
+    };
+    println!("scene {spec}, adapter {adapter}, {} CPU threads, mean of {frames} frames after one warm-up", rayon::current_num_threads());
+    print!("{:16}", "stage (ms)");
+    for r in &rows {
+        print!("{:>20}", format!("{} VPLs {}", r.vpls, r.size));
+    }
+    println!();
+    for (i, (name, _)) in rows[0].stages.iter().enumerate() {
+        print!("{name:16}");
+        for r in &rows {
+            print!("{:>20.2}", r.stages[i].1 * 1e3);
+        }
+        println!();
+    }
+    print!("{:16}", "frame");
+    for r in &rows {
+        print!("{:>20.2}", r.seconds_per_frame * 1e3);
+    }
+    println!();
+    report::prepare_out_dir(&opts.out)?;
+    report::write_json(
+        &opts.out.join("bench.json"),
+        &serde_json::json!({ "scene": spec, "adapter": adapter, "rows": rows }),
+    )?;
     Ok(())
 }

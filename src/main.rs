@@ -28,6 +28,21 @@ enum Command {
     },
     /// Render frames on the GPU by instant radiosity (frames, preview.gif, run.json)
     Render(irad::commands::RenderOpts),
+    /// Time whole frames per stage (CPU stages and GPU passes) for several VPL counts and sizes
+    Bench {
+        #[command(flatten)]
+        opts: irad::commands::RenderOpts,
+        /// Configurations VPLS@WxH
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "256@256x256,1024@512x512"
+        )]
+        configs: Vec<irad::commands::BenchConfig>,
+        /// Frames measured per configuration (after one warm-up frame)
+        #[arg(long, default_value_t = 5)]
+        repeat: u32,
+    },
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value = "auto")]
@@ -51,6 +66,11 @@ fn main() {
             exposure,
         } => irad::commands::reference(&opts, spp, &out, exposure).map(|_| ()),
         Command::Render(opts) => irad::commands::render(&opts),
+        Command::Bench {
+            opts,
+            configs,
+            repeat,
+        } => irad::commands::bench(&opts, &configs, repeat.max(1)),
         Command::Info { backend } => irad::commands::info(backend),
         Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
     };

@@ -106,3 +106,115 @@ fn scenes_lists_every_builtin() {
         );
     }
 }
+
+const SMALL: &[&str] = &[
+    "--size",
+    "32x32",
+    "--vpls",
+    "16",
+    "--light-samples",
+    "4",
+    "--shadow-size",
+    "32",
+    "--ism-points",
+    "512",
+];
+
+#[test]
+fn render_writes_frames_preview_and_record() {
+    let out = tmp("render");
+    let mut args = vec![
+        "render",
+        "cornell-box",
+        "--frames",
+        "2..4",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(SMALL);
+    let o = irad(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "frame_0002.exr",
+        "frame_0002.png",
+        "frame_0003.exr",
+        "frame_0003.png",
+        "preview.gif",
+        "run.json",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert!(run["adapter"]["name"].as_str().unwrap().len() > 1);
+    let frames = run["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 2);
+    for f in frames {
+        assert!(f["seconds"].as_f64().unwrap() > 0.0);
+        for stage in [
+            "scene",
+            "bvh",
+            "vpls",
+            "gbuffer",
+            "shadow_maps",
+            "direct",
+            "ism_splat",
+            "ism_pullpush",
+            "gather",
+            "compose",
+        ] {
+            assert!(
+                f["stages"][stage].as_f64().is_some(),
+                "stage {stage} missing"
+            );
+        }
+        assert!(f["vpls"].as_u64().unwrap() > 0 && f["vpls"].as_u64().unwrap() <= 16);
+    }
+    let gif = image::open(out.join("preview.gif"));
+    assert!(gif.is_ok(), "preview.gif does not decode");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn render_rejects_bad_arguments_before_rendering() {
+    let out = tmp("render-bad");
+    let o = out.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--size", "0x0"], "out of range"),
+        (&["--size", "9000x10"], "out of range"),
+        (&["--vpls", "0"], "out of range"),
+        (&["--vpls", "40000"], "lower --vpls or --ism-size"),
+        (&["--ism-size", "48"], "power of two"),
+        (&["--clamp=-1"], "must be a distance"),
+        (&["--fps", "0"], "--fps"),
+    ];
+    for (extra, msg) in cases {
+        let mut args = vec!["render", "cornell", "--frames", "0", "--out", o];
+        args.extend_from_slice(extra);
+        let r = irad(&args);
+        let e = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && e.contains(msg),
+            "{extra:?}: expected '{msg}' in: {e}"
+        );
+        assert!(
+            !out.join("frame_0000.exr").exists(),
+            "{extra:?} rendered a frame"
+        );
+    }
+    // An output folder below a regular file cannot be made.
+    let file = tmp("render-file");
+    std::fs::write(&file, b"x").unwrap();
+    let mut args = vec!["render", "cornell", "--frames", "0"];
+    args.extend_from_slice(SMALL);
+    let sub = file.join("sub");
+    args.extend_from_slice(&["--out", sub.to_str().unwrap()]);
+    let r = irad(&args);
+    let e = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        !r.status.success() && e.contains("cannot create the output folder"),
+        "{e}"
+    );
+    std::fs::remove_file(&file).unwrap();
+    let _ = std::fs::remove_dir_all(&out);
+}

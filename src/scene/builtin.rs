@@ -22,7 +22,7 @@ pub const BUILTINS: &[Builtin] = &[
     },
     Builtin {
         name: "cornell-orbit",
-        stresses: "the camera swings 20 degrees either side of the box over 3 s: importance changes with the view, so CDF sampling re-maps its VPLs",
+        stresses: "the camera swings 12 degrees either side of the box over 3 s: importance changes with the view, so CDF sampling re-maps its VPLs",
         gltf: include_str!("../../scenes/cornell-orbit.gltf"),
     },
     Builtin {
@@ -81,7 +81,7 @@ pub fn generate(name: &str) -> Option<String> {
         "cornell-orbit" => {
             let n = cornell(&mut b);
             let times: Vec<f32> = (0..=12).map(|i| i as f32 * 0.25).collect();
-            let angle = |t: f32| 20f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
+            let angle = |t: f32| 12f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
             let pos: Vec<f32> = times
                 .iter()
                 .flat_map(|&t| [3.9 * angle(t).sin(), 0.0, 3.9 * angle(t).cos()])
