@@ -63,7 +63,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("reference");
     g.throughput(Throughput::Elements(32 * 32 * 4));
     g.bench_function("32x32x4spp", |b| {
-        b.iter(|| irad::reference::render(&f, &tr, &s, 0, &|| {}))
+        b.iter(|| irad::reference::render(&f, &tr, &s, &|| {}))
     });
     g.finish();
 }

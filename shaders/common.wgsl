@@ -71,6 +71,14 @@ fn paraboloid_texel(d: vec3f, n: vec3f, size: u32) -> u32 {
     return u32(t.y) * size + u32(t.x);
 }
 
+// An ISM pyramid value `depth + 4 * level` (>= 0): its level and normalized depth.
+fn ism_level(v: f32) -> f32 {
+    return floor(v * 0.25);
+}
+fn ism_depth(v: f32) -> f32 {
+    return v - 4.0 * ism_level(v);
+}
+
 // The G-buffer texel: xyz world position bits, w = triangle index + 1 (0: nothing hit).
 fn gbuffer_x(g: vec4u) -> vec3f {
     return bitcast<vec3f>(g.xyz);

@@ -39,10 +39,14 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             continue;
         }
         let stored = ism[i * P.ism_size * P.ism_size + paraboloid_texel(-w, v.normal.xyz, P.ism_size)];
-        let tan_x = min(sqrt(max(1.0 - cos_x * cos_x, 0.0)) / cos_x, 4.0);
-        let bias = P.ism_bias * dist * texel_angle * (1.0 + tan_x) / P.far;
-        if stored >= 0.0 && dist / P.far > stored + bias {
-            continue;
+        if stored >= 0.0 {
+            // The footprint of the level the depth came from (filled holes: a coarser one).
+            let footprint = dist * texel_angle * exp2(ism_level(stored));
+            let tan_x = min(sqrt(max(1.0 - cos_x * cos_x, 0.0)) / cos_x, 4.0);
+            let bias = P.ism_bias * footprint * (1.0 + tan_x) / P.far;
+            if dist / P.far > ism_depth(stored) + bias {
+                continue;
+            }
         }
         sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, P.dmin * P.dmin)));
     }

@@ -1,6 +1,8 @@
-// Pull-push hole filling within each ISM tile. The pyramid holds normalized depths, -1 for a
+// Pull-push hole filling within each ISM tile. The pyramid holds `depth + 4 * level` (depth
+// normalized to [0,1], level the pyramid level whose footprint the value stands for), -1 for a
 // hole. `decode` turns the splat atlas into level 0; `pull` averages the valid children into
-// the next coarser level; `push` fills holes of a level from its (already filled) parent.
+// the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
+// filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> atlas: array<u32>;
@@ -45,12 +47,12 @@ fn pull(@builtin(global_invocation_id) gid: vec3u) {
         for (var dx = 0u; dx < 2u; dx++) {
             let v = pyramid[base + (y + dy) * L.size + x + dx];
             if v >= 0.0 {
-                sum += v;
+                sum += ism_depth(v);
                 count += 1.0;
             }
         }
     }
-    pyramid[L.parent_offset + i] = select(-1.0, sum / max(count, 1.0), count > 0.0);
+    pyramid[L.parent_offset + i] = select(-1.0, sum / max(count, 1.0) + 4.0 * f32(L.level + 1u), count > 0.0);
 }
 
 // One invocation per texel of level `L.size`.

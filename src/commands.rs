@@ -81,13 +81,10 @@ pub fn reference(opts: &SceneOpts, spp: u32, out: &Path, exposure: f32) -> Resul
             }
             None => tracer = Some(Tracer::new(&frame)),
         }
-        let img = crate::reference::render(
-            &frame,
-            tracer.as_ref().expect("set above"),
-            &s,
-            f as u64,
-            &|| pb.inc(1),
-        );
+        let img =
+            crate::reference::render(&frame, tracer.as_ref().expect("set above"), &s, &|| {
+                pb.inc(1)
+            });
         let seconds = start.elapsed().as_secs_f64();
         report::write_frame(out, f, &img, exposure)?;
         record.frames.push(ReferenceFrame {
@@ -172,6 +169,19 @@ pub struct RenderOpts {
     /// VPL sampler
     #[arg(long, value_enum, default_value = "uniform")]
     pub sampler: crate::frame::SamplerKind,
+    /// M: candidate VPLs a frame for cdf and mh [default: 4 x --vpls]
+    #[arg(long)]
+    pub candidates: Option<u32>,
+    /// K: camera points for importance
+    #[arg(long, default_value_t = 256)]
+    pub camera_points: u32,
+    /// Defensive floor of the importance, as a fraction of its mean
+    #[arg(long, default_value_t = 0.05)]
+    pub eps: f32,
+    /// MH: probability that a chain proposes in a frame (1: one step every frame; lower keeps
+    /// VPLs longer, at the cost of following a moving view more slowly)
+    #[arg(long, default_value_t = 1.0)]
+    pub mh_rate: f32,
     /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: crate::gpu::BackendChoice,
@@ -199,6 +209,9 @@ pub struct RenderOpts {
     /// Shadow hemicube face side in texels
     #[arg(long, default_value_t = 256)]
     pub shadow_size: u32,
+    /// Also write each frame's direct and indirect light (frame_FFFF_direct.exr/.png, _indirect)
+    #[arg(long)]
+    pub components: bool,
 }
 
 impl RenderOpts {
@@ -235,9 +248,29 @@ impl RenderOpts {
                 0.02 * (hi - lo).length()
             }
         };
+        if !(self.eps.is_finite() && self.eps >= 0.0) {
+            bail!("--eps {} must be >= 0", self.eps);
+        }
+        if self.camera_points == 0 || self.camera_points > 1 << 20 {
+            bail!(
+                "--camera-points {} is out of range (1 to 1048576)",
+                self.camera_points
+            );
+        }
+        if !(self.mh_rate > 0.0 && self.mh_rate <= 1.0) {
+            bail!("--mh-rate {} must be in (0, 1]", self.mh_rate);
+        }
+        let candidates = self.candidates.unwrap_or(self.vpls.saturating_mul(4));
+        if candidates == 0 || candidates > 1 << 24 {
+            bail!("--candidates {candidates} is out of range (1 to 16777216)");
+        }
         Ok(crate::frame::Settings {
             sampler: self.sampler,
             vpls: self.vpls,
+            candidates,
+            camera_points: self.camera_points,
+            eps: self.eps,
+            mh_rate: self.mh_rate,
             dmin,
             seed: self.scene.seed,
             fps: self.scene.fps,
@@ -265,6 +298,9 @@ struct RenderFrame {
     vpls: usize,
     paths: u64,
     replaced: f32,
+    acceptance: Option<f32>,
+    b: Option<f32>,
+    importance_seconds: f64,
     mean_rgb: [f32; 3],
 }
 
@@ -295,8 +331,14 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
     let pb = report::progress(frames.len() as u64, "render");
     let mut previews = Vec::new();
     for f in frames.iter() {
-        let fo = pipeline.render_frame(f, false)?;
+        let fo = pipeline.render_frame(f, opts.components)?;
         let stem = report::frame_stem(f);
+        if let (Some(d), Some(i)) = (&fo.image.direct, &fo.image.indirect) {
+            for (img, part) in [(d, "direct"), (i, "indirect")] {
+                img.write_exr(&out.join(format!("{stem}_{part}.exr")))?;
+                img.write_png(&out.join(format!("{stem}_{part}.png")), opts.exposure)?;
+            }
+        }
         fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
         let (w, h) = (opts.scene.size.width, opts.scene.size.height);
         let png = image::RgbImage::from_raw(w, h, fo.image.ldr.clone()).expect("w*h*3 bytes");
@@ -314,6 +356,9 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
             vpls: fo.selection.vpls.len(),
             paths: fo.selection.paths,
             replaced: fo.selection.replaced,
+            acceptance: fo.selection.acceptance,
+            b: fo.selection.b,
+            importance_seconds: fo.selection.importance_s,
             mean_rgb: fo.image.hdr.mean().to_array(),
         });
         report::write_json(&out.join("run.json"), &record)?;
@@ -451,4 +496,59 @@ pub fn bench(opts: &RenderOpts, configs: &[BenchConfig], frames: u32) -> Result<
         &serde_json::json!({ "scene": spec, "adapter": adapter, "rows": rows }),
     )?;
     Ok(())
+}
+
+/// Writes per-frame metrics as CSV.
+pub fn metrics_csv(m: &crate::metrics::SequenceMetrics) -> String {
+    let mut s = String::from("frame,rel_mse,rmse,bias,rel_bias,flicker,flicker_rms\n");
+    for f in &m.frames {
+        let o = |x: Option<f64>| x.map(|v| format!("{v:.8}")).unwrap_or_default();
+        s += &format!(
+            "{},{:.8},{:.8},{:.8},{:.8},{},{}\n",
+            f.frame,
+            f.error.rel_mse,
+            f.error.rmse,
+            f.error.bias,
+            f.error.rel_bias,
+            o(f.flicker),
+            o(f.flicker_rms)
+        );
+    }
+    s
+}
+
+/// `irad metrics TEST REFERENCE`: error and flicker of one image sequence against another.
+pub fn metrics(
+    test: &Path,
+    reference: &Path,
+    out: Option<&Path>,
+) -> Result<crate::metrics::SequenceMetrics> {
+    let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
+    let m = crate::metrics::sequence(&numbers, &t, &r)?;
+    println!(
+        "{:>6} {:>10} {:>10} {:>10} {:>10}",
+        "frame", "relMSE", "RMSE", "bias", "flicker"
+    );
+    for f in &m.frames {
+        println!(
+            "{:>6} {:>10.5} {:>10.5} {:>+10.5} {:>10}",
+            f.frame,
+            f.error.rel_mse,
+            f.error.rmse,
+            f.error.bias,
+            f.flicker
+                .map(|v| format!("{v:.5}"))
+                .unwrap_or_else(|| "-".into())
+        );
+    }
+    println!(
+        "mean relMSE {:.5}, RMSE {:.5}, bias {:+.5}; flicker F1 {:.5} (RMS {:.5}); temporal variance {:.3e}, temporal bias^2 {:.3e}",
+        m.mean_rel_mse, m.mean_rmse, m.mean_bias, m.flicker_f1, m.flicker_rms, m.temporal_variance, m.temporal_bias
+    );
+    let dir = out.unwrap_or(test);
+    report::prepare_out_dir(dir)?;
+    report::write_json(&dir.join("metrics.json"), &m)?;
+    crate::image::write_bytes(&dir.join("metrics.csv"), metrics_csv(&m).as_bytes())?;
+    println!("wrote {}/metrics.json and metrics.csv", dir.display());
+    Ok(m)
 }

@@ -3,28 +3,35 @@
 use crate::gpu::{BackendChoice, Gpu, GpuFrame, RenderedFrame, Renderer, RendererConfig};
 use crate::scene::Scene;
 use crate::trace::Tracer;
-use crate::vpl::sampler::{self, Selection};
+pub use crate::vpl::sampler::SamplerKind;
+use crate::vpl::sampler::{Sampler, SamplerParams, Selection};
 use anyhow::Result;
 use serde::Serialize;
 use std::time::Instant;
-
-/// Which sampler picks the frame's VPLs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum SamplerKind {
-    /// Keller's instant radiosity: fresh light paths every frame
-    Uniform,
-}
 
 /// What a sequence is rendered with, besides the GPU sizes.
 #[derive(Clone, Debug, Serialize)]
 pub struct Settings {
     pub sampler: SamplerKind,
     pub vpls: u32,
+    /// M: candidate VPLs a frame (cdf, mh).
+    pub candidates: u32,
+    /// K: camera points for importance.
+    pub camera_points: u32,
+    /// Defensive floor factor of the importance.
+    pub eps: f32,
+    /// MH: probability that a chain proposes in a frame.
+    pub mh_rate: f32,
     /// Distance clamp of the VPL contribution, in scene units.
     pub dmin: f32,
     pub seed: u64,
     pub fps: f32,
+}
+
+/// Records the seconds since `t` as stage `name` and restarts `t`.
+fn lap(stages: &mut Vec<(&'static str, f64)>, name: &'static str, t: &mut Instant) {
+    stages.push((name, t.elapsed().as_secs_f64()));
+    *t = Instant::now();
 }
 
 /// A rendered frame with its record.
@@ -44,6 +51,7 @@ pub struct Pipeline {
     pub settings: Settings,
     pub renderer: Renderer,
     tracer: Tracer,
+    sampler: Sampler,
 }
 
 impl Pipeline {
@@ -57,11 +65,25 @@ impl Pipeline {
         let frame0 = scene.at(0.0);
         let renderer = Renderer::new(gpu, config, &frame0)?;
         let tracer = Tracer::new(&frame0);
+        let c = &renderer.config;
+        let sampler = Sampler::new(SamplerParams {
+            kind: settings.sampler,
+            slots: settings.vpls as usize,
+            candidates: settings.candidates as usize,
+            camera_points: settings.camera_points as usize,
+            eps: settings.eps,
+            mh_rate: settings.mh_rate,
+            dmin: settings.dmin,
+            seed: settings.seed,
+            width: c.width,
+            height: c.height,
+        });
         Ok(Pipeline {
             scene,
             settings,
             renderer,
             tracer,
+            sampler,
         })
     }
 
@@ -71,27 +93,22 @@ impl Pipeline {
         let s = &self.settings;
         let start = Instant::now();
         let mut stages = Vec::new();
-        let mut lap = |name: &'static str, t: &mut Instant| {
-            stages.push((name, t.elapsed().as_secs_f64()));
-            *t = Instant::now();
-        };
         let mut t = Instant::now();
         // 1. The scene at time t.
         let frame = self.scene.at(f as f32 / s.fps);
-        lap("scene", &mut t);
+        lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
         self.tracer.update(&frame);
-        lap("bvh", &mut t);
-        // 3-6. Light paths and the sampler: the frame's VPLs and weights.
-        let selection = match s.sampler {
-            SamplerKind::Uniform => {
-                sampler::uniform(&frame, &self.tracer, s.seed, f as u64, s.vpls as usize)
-            }
-        };
-        lap("vpls", &mut t);
+        lap(&mut stages, "bvh", &mut t);
+        // 3-6. Camera points, light paths, importance and the sampler: the frame's VPLs and
+        // their weights.
+        let selection = self.sampler.select(&frame, &self.tracer, f as u64);
+        stages.push(("importance", selection.importance_s));
+        stages.push(("vpls", t.elapsed().as_secs_f64() - selection.importance_s));
+        t = Instant::now();
         // Emitter samples for direct light (a fixed stream: still scenes get still direct light).
         let lights = frame.emitter_samples(s.seed, self.renderer.config.light_samples as usize);
-        lap("light_samples", &mut t);
+        lap(&mut stages, "light_samples", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
         let image = self.renderer.render(
             &GpuFrame {

@@ -43,6 +43,16 @@ enum Command {
         #[arg(long, default_value_t = 5)]
         repeat: u32,
     },
+    /// Error and flicker of an image sequence (folder of frame_FFFF.exr/.png) against a reference
+    Metrics {
+        /// Folder of test frames
+        test: PathBuf,
+        /// Folder of reference frames
+        reference: PathBuf,
+        /// Where metrics.json and metrics.csv go [default: the test folder]
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value = "auto")]
@@ -71,6 +81,11 @@ fn main() {
             configs,
             repeat,
         } => irad::commands::bench(&opts, &configs, repeat.max(1)),
+        Command::Metrics {
+            test,
+            reference,
+            out,
+        } => irad::commands::metrics(&test, &reference, out.as_deref()).map(|_| ()),
         Command::Info { backend } => irad::commands::info(backend),
         Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
     };

@@ -45,6 +45,10 @@ fn pipeline(scene: &str, cfg: RendererConfig, dmin: f32, backend: BackendChoice)
     let settings = Settings {
         sampler: SamplerKind::Uniform,
         vpls: cfg.max_vpls,
+        candidates: cfg.max_vpls * 4,
+        camera_points: 64,
+        eps: 0.05,
+        mh_rate: 1.0,
         dmin,
         seed: 1,
         fps: 24.0,

@@ -36,6 +36,11 @@ pub const BUILTINS: &[Builtin] = &[
         gltf: include_str!("../../scenes/cornell-box.gltf"),
     },
     Builtin {
+        name: "two-rooms",
+        stresses: "importance decides: the light is in one room, the camera walks through the door into the other over 3 s; most plain VPLs land where the camera cannot see",
+        gltf: include_str!("../../scenes/two-rooms.gltf"),
+    },
+    Builtin {
         name: "furnace",
         stresses: "white furnace: a closed box, albedo 0.5, every wall emits 1: radiance is exactly 2 everywhere",
         gltf: include_str!("../../scenes/furnace.gltf"),
@@ -119,6 +124,7 @@ pub fn generate(name: &str) -> Option<String> {
             b.animate("slide", n.small_box, "translation", "LINEAR", &times, &pos);
             b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
         }
+        "two-rooms" => two_rooms(&mut b),
         "furnace" => {
             let m = b.material("furnace", [0.5; 3], [1.0; 3]);
             let mut nodes = Vec::new();
@@ -147,6 +153,79 @@ fn cube_faces() -> [(Vec3, Vec3, Vec3); 6] {
         (z, x, y),
         (-z, y, x),
     ]
+}
+
+/// Two rooms, x in [-4,0] (lit) and [0,4], joined by a door in the wall at x = 0.
+fn two_rooms(b: &mut GltfBuilder) {
+    let white = b.material("white", [0.8, 0.8, 0.8], [0.0; 3]);
+    let grey = b.material("floor", [0.55, 0.55, 0.5], [0.0; 3]);
+    let blue = b.material("blue", [0.2, 0.3, 0.75], [0.0; 3]);
+    let orange = b.material("orange", [0.8, 0.5, 0.2], [0.0; 3]);
+    let light = b.material("light", [0.8, 0.8, 0.8], [40.0, 38.0, 34.0]);
+    let (x, y, z) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let h = 1.25;
+    let quads = [
+        ("floor", Vec3::new(0.0, 0.0, 0.0), z * 2.0, x * 4.0, grey),
+        ("ceiling", Vec3::new(0.0, 2.5, 0.0), x * 4.0, z * 2.0, white),
+        ("back", Vec3::new(0.0, h, -2.0), x * 4.0, y * h, white),
+        ("front", Vec3::new(0.0, h, 2.0), y * h, x * 4.0, white),
+        ("end_a", Vec3::new(-4.0, h, 0.0), y * h, z * 2.0, orange),
+        ("end_b", Vec3::new(4.0, h, 0.0), z * 2.0, y * h, blue),
+        // The dividing wall at x = 0 with a door z in [-0.5, 0.5], y in [0, 2].
+        (
+            "wall_left",
+            Vec3::new(0.0, h, -1.25),
+            z * 0.75,
+            y * h,
+            white,
+        ),
+        (
+            "wall_right",
+            Vec3::new(0.0, h, 1.25),
+            z * 0.75,
+            y * h,
+            white,
+        ),
+        (
+            "lintel",
+            Vec3::new(0.0, 2.25, 0.0),
+            z * 0.5,
+            y * 0.25,
+            white,
+        ),
+        ("light", Vec3::new(-2.5, 2.49, 0.0), x * 0.5, z * 0.5, light),
+    ];
+    let mut roots = Vec::new();
+    for (name, c, u, v, m) in quads {
+        let mesh = b.quad_mesh(name, c, u, v, m);
+        roots.push(b.node(json!({ "name": name, "mesh": mesh })));
+    }
+    let cube = b.cube_mesh("box", white);
+    roots.push(b.node(json!({
+        "name": "box", "mesh": cube,
+        "translation": [2.2, 0.5, -0.8],
+        "rotation": Quat::from_rotation_y(20f32.to_radians()).to_array(),
+        "scale": [0.5, 0.5, 0.5],
+    })));
+    let look_x = Quat::from_rotation_y(-90f32.to_radians());
+    let cam = b.camera_node([-1.5, 1.3, 0.2], look_x, 60.0);
+    roots.push(cam);
+    b.roots = roots;
+    // Walk through the door, turning toward the box.
+    let times = [0.0, 3.0];
+    b.animate(
+        "walk",
+        cam,
+        "translation",
+        "LINEAR",
+        &times,
+        &[-1.5, 1.3, 0.2, 0.9, 1.3, 0.8],
+    );
+    let turn: Vec<f32> = [-90.0f32, -45.0]
+        .iter()
+        .flat_map(|a| Quat::from_rotation_y(a.to_radians()).to_array())
+        .collect();
+    b.animate("walk", cam, "rotation", "LINEAR", &times, &turn);
 }
 
 struct CornellNodes {

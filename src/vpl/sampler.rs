@@ -1,52 +1,393 @@
-//! Samplers: which VPLs a frame uses, and their weights.
+//! Stage 6: samplers pick the frame's N VPLs (one per slot) and their weights. All draw from
+//! the same light-path distribution p and share the importance I.
 //!
-//! `uniform` is Keller's instant radiosity: fresh light paths every frame, traced until the
-//! VPL slots are full; each VPL is weighted by 1 / (paths used).
+//! - `uniform`: Keller's instant radiosity: fresh light paths until the slots are full, each
+//!   VPL weighted 1 / (paths used).
+//! - `cdf`: M fresh candidates a frame (the VPLs of K paths), N drawn by stratified inverse
+//!   transform of the CDF of I, weight `b / (N I(v)) * (M / K)` with `b` the mean of I over
+//!   the candidates. (M / K turns "one candidate" into "one path's share": the candidates of K
+//!   paths sum, divided by K, to the uniform estimator.)
+//! - `mh`: N independent Metropolis-Hastings chains, one per slot, one step a frame: re-trace
+//!   the slot's path in the new frame, re-evaluate its I under the new camera, propose a
+//!   uniformly chosen candidate of the frame (an independence proposal from p), accept with
+//!   `min(1, I'/I)`; weight `b / (N I) * (M / K)`. Chains start from a CDF draw.
+//!
+//! I always includes the defensive floor `eps * mean(I over the candidates)`.
 
+use super::importance::{camera_points, importance, importance_all, CameraPoint};
 use super::{trace_path, ShadedVpl, Vpl};
+use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
+use rand::Rng;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which sampler picks the frame's VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// Keller's instant radiosity: fresh light paths every frame
+    Uniform,
+    /// Importance by inverse transform of the CDF over fresh candidates
+    Cdf,
+    /// One Metropolis-Hastings chain per slot: VPLs stay until a better one is proposed
+    Mh,
+}
+
+/// The sampler's parameters.
+#[derive(Clone, Debug, Serialize)]
+pub struct SamplerParams {
+    pub kind: SamplerKind,
+    /// N: VPL slots.
+    pub slots: usize,
+    /// M: candidate VPLs a frame (cdf, mh).
+    pub candidates: usize,
+    /// K: camera points for importance.
+    pub camera_points: usize,
+    /// The defensive floor's factor.
+    pub eps: f32,
+    /// MH: probability that a chain proposes in a frame (1: one step a frame).
+    pub mh_rate: f32,
+    pub dmin: f32,
+    pub seed: u64,
+    /// The image the camera points stratify.
+    pub width: u32,
+    pub height: u32,
+}
 
 /// The frame's VPLs and what the run record says about them.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Selection {
     pub vpls: Vec<Vpl>,
     pub shaded: Vec<ShadedVpl>,
-    /// Light paths traced for this frame.
+    /// Light paths traced for this frame's fresh VPLs (candidates).
     pub paths: u64,
     /// Fraction of slots whose VPL changed since the last frame.
     pub replaced: f32,
+    /// MH: fraction of this frame's proposals accepted.
+    pub acceptance: Option<f32>,
+    /// Mean floored importance over the candidates.
+    pub b: Option<f32>,
+    /// Seconds spent on camera points and importance.
+    pub importance_s: f64,
 }
 
 /// Path ids of frame f start at f * PATHS_PER_FRAME, so frames draw independent paths.
 pub const PATHS_PER_FRAME: u64 = 1 << 32;
 
-/// Uniform sampling: paths `f * 2^32 + k`, k = 0, 1, ... until `slots` VPLs; a path whose VPLs
-/// would overflow the slots is not used (so every used path is whole).
-pub fn uniform(
+/// Identity of a VPL: (path id, depth). The path can be re-traced in any frame.
+type Key = (u64, u32);
+
+fn key(v: &Vpl) -> Key {
+    (v.path, v.depth)
+}
+
+/// The VPLs of paths `frame * 2^32 + k`, k = 0, 1, ... Paths are added whole while `full`
+/// says the set is not complete; returns the VPLs and the number of paths.
+fn fresh_paths(
     frame: &Frame,
     tracer: &Tracer,
     seed: u64,
     frame_index: u64,
-    slots: usize,
-) -> Selection {
-    let mut vpls = Vec::with_capacity(slots);
+    target: usize,
+    whole: bool,
+) -> (Vec<Vpl>, u64) {
+    let mut vpls = Vec::with_capacity(target + 16);
     let mut paths = 0u64;
-    while vpls.len() < slots && paths < 64 * slots as u64 + 1024 {
-        let p = trace_path(frame, tracer, seed, frame_index * PATHS_PER_FRAME + paths);
-        if vpls.len() + p.len() > slots {
-            break;
+    // Batches of paths in parallel, kept in path order.
+    while vpls.len() < target && paths < 64 * target as u64 + 1024 {
+        let batch = ((target - vpls.len()) / 2).clamp(1, 4096) as u64;
+        let first = frame_index * PATHS_PER_FRAME + paths;
+        let traced: Vec<Vec<Vpl>> = {
+            use rayon::prelude::*;
+            (first..first + batch)
+                .into_par_iter()
+                .map(|p| trace_path(frame, tracer, seed, p))
+                .collect()
+        };
+        for p in traced {
+            if vpls.len() >= target || (whole && vpls.len() + p.len() > target) {
+                return (vpls, paths);
+            }
+            // A path that left no VPL (its light escaped) still counts as a path.
+            vpls.extend(p);
+            paths += 1;
         }
-        // A path that left no VPL (its light escaped) still counts as a path.
-        vpls.extend(p);
-        paths += 1;
     }
-    let w = 1.0 / paths.max(1) as f32;
-    let shaded = vpls.iter().map(|v| ShadedVpl::new(v, w)).collect();
-    Selection {
-        vpls,
-        shaded,
-        paths,
-        replaced: 1.0,
+    (vpls, paths)
+}
+
+/// Stratified inverse-transform draws of `n` indices from weights `w`.
+pub fn cdf_draw(w: &[f32], n: usize, r: &mut impl Rng) -> Vec<usize> {
+    let mut cdf = Vec::with_capacity(w.len());
+    let mut acc = 0.0f64;
+    for &x in w {
+        acc += x as f64;
+        cdf.push(acc);
+    }
+    (0..n)
+        .map(|j| {
+            let u = (j as f64 + r.random::<f64>()) / n as f64 * acc;
+            cdf.partition_point(|&c| c <= u).min(w.len() - 1)
+        })
+        .collect()
+}
+
+/// One Metropolis-Hastings decision: accept a proposal of importance `proposed` from a state
+/// of importance `current` (a state of importance 0 always moves).
+pub fn mh_accept(current: f32, proposed: f32, u: f32) -> bool {
+    current <= 0.0 || u * current < proposed
+}
+
+/// A sampler with its state across frames.
+pub struct Sampler {
+    pub params: SamplerParams,
+    /// The keys of the VPLs in the slots last frame.
+    slots: Vec<Key>,
+}
+
+/// Candidates of a frame with their floored importance.
+struct Candidates {
+    vpls: Vec<Vpl>,
+    importance: Vec<f32>,
+    paths: u64,
+    /// eps * mean(I), added to every I.
+    floor: f32,
+    /// Mean floored importance.
+    b: f32,
+}
+
+impl Sampler {
+    pub fn new(params: SamplerParams) -> Self {
+        Sampler {
+            params,
+            slots: Vec::new(),
+        }
+    }
+
+    fn candidates(
+        &self,
+        frame: &Frame,
+        tracer: &Tracer,
+        f: u64,
+        points: &[CameraPoint],
+    ) -> Candidates {
+        let p = &self.params;
+        let (vpls, paths) = fresh_paths(frame, tracer, p.seed, f, p.candidates, false);
+        let raw = importance_all(&vpls, points, tracer, p.dmin);
+        let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
+        let floor = (p.eps as f64 * mean) as f32;
+        Candidates {
+            importance: raw.iter().map(|&x| x + floor).collect(),
+            vpls,
+            paths,
+            floor,
+            b: (mean * (1.0 + p.eps as f64)) as f32,
+        }
+    }
+
+    /// Picks frame `f`'s VPLs.
+    pub fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
+        let p = self.params.clone();
+        if p.kind == SamplerKind::Uniform {
+            let (vpls, paths) = fresh_paths(frame, tracer, p.seed, f, p.slots, true);
+            let w = 1.0 / paths.max(1) as f32;
+            let keys: Vec<Key> = vpls.iter().map(key).collect();
+            let replaced = self.replaced(&keys);
+            self.slots = keys;
+            return Selection {
+                shaded: vpls.iter().map(|v| ShadedVpl::new(v, w)).collect(),
+                vpls,
+                paths,
+                replaced,
+                ..Default::default()
+            };
+        }
+        let t = Instant::now();
+        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed, f);
+        let c = self.candidates(frame, tracer, f, &points);
+        if c.vpls.is_empty() {
+            self.slots.clear();
+            return Selection {
+                paths: c.paths,
+                replaced: 1.0,
+                importance_s: t.elapsed().as_secs_f64(),
+                ..Default::default()
+            };
+        }
+        let n = p.slots;
+        let scale = c.b / n as f32 * (c.vpls.len() as f32 / c.paths.max(1) as f32);
+        let mut r = rng(&[p.seed, f, 0x5a3b]);
+        let (chosen, imp, acceptance) = if p.kind == SamplerKind::Mh && self.slots.len() == n {
+            let mut chosen = Vec::with_capacity(n);
+            let mut imp = Vec::with_capacity(n);
+            let mut accepted = 0usize;
+            // Re-trace each slot's path and re-evaluate its importance in this frame.
+            let current: Vec<Option<(Vpl, f32)>> = {
+                use rayon::prelude::*;
+                self.slots
+                    .par_iter()
+                    .map(|&(path, depth)| {
+                        let v = trace_path(frame, tracer, p.seed, path)
+                            .into_iter()
+                            .find(|v| v.depth == depth)?;
+                        let i = importance(&v, &points, tracer, p.dmin) + c.floor;
+                        Some((v, i))
+                    })
+                    .collect()
+            };
+            let mut proposals = 0usize;
+            for cur in current {
+                let j = r.random_range(0..c.vpls.len());
+                let u: f32 = r.random();
+                let propose = r.random::<f32>() < p.mh_rate || cur.is_none();
+                proposals += propose as usize;
+                match cur {
+                    Some((v, i)) if !propose || !mh_accept(i, c.importance[j], u) => {
+                        chosen.push(v);
+                        imp.push(i);
+                    }
+                    _ => {
+                        accepted += 1;
+                        chosen.push(c.vpls[j]);
+                        imp.push(c.importance[j]);
+                    }
+                }
+            }
+            (chosen, imp, Some(accepted as f32 / proposals.max(1) as f32))
+        } else {
+            let idx = cdf_draw(&c.importance, n, &mut r);
+            let chosen: Vec<Vpl> = idx.iter().map(|&i| c.vpls[i]).collect();
+            let imp = idx.iter().map(|&i| c.importance[i]).collect();
+            (
+                chosen,
+                imp,
+                if p.kind == SamplerKind::Mh {
+                    Some(1.0)
+                } else {
+                    None
+                },
+            )
+        };
+        let shaded = chosen
+            .iter()
+            .zip(&imp)
+            .map(|(v, &i)| ShadedVpl::new(v, scale / i))
+            .collect();
+        let keys: Vec<Key> = chosen.iter().map(key).collect();
+        let replaced = self.replaced(&keys);
+        self.slots = keys;
+        Selection {
+            vpls: chosen,
+            shaded,
+            paths: c.paths,
+            replaced,
+            acceptance,
+            b: Some(c.b),
+            importance_s: t.elapsed().as_secs_f64(),
+        }
+    }
+
+    fn replaced(&self, keys: &[Key]) -> f32 {
+        if self.slots.len() != keys.len() || keys.is_empty() {
+            return 1.0;
+        }
+        self.slots.iter().zip(keys).filter(|(a, b)| a != b).count() as f32 / keys.len() as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Chi-square statistic of observed counts against expected probabilities.
+    fn chi2(counts: &[u64], probs: &[f64]) -> f64 {
+        let n: u64 = counts.iter().sum();
+        counts
+            .iter()
+            .zip(probs)
+            .map(|(&c, &p)| (c as f64 - n as f64 * p).powi(2) / (n as f64 * p))
+            .sum()
+    }
+
+    // 99.9% quantile of chi-square with 5 degrees of freedom.
+    const CHI2_5_999: f64 = 20.52;
+
+    const P: [f64; 6] = [0.3, 0.25, 0.2, 0.1, 0.1, 0.05];
+    const I: [f32; 6] = [0.5, 2.0, 1.0, 4.0, 0.25, 3.0];
+
+    fn target() -> Vec<f64> {
+        let z: f64 = P.iter().zip(I).map(|(p, i)| p * i as f64).sum();
+        P.iter().zip(I).map(|(p, i)| p * i as f64 / z).collect()
+    }
+
+    fn draw_p(r: &mut impl Rng) -> usize {
+        let u: f64 = r.random();
+        let mut acc = 0.0;
+        for (i, p) in P.iter().enumerate() {
+            acc += p;
+            if u < acc {
+                return i;
+            }
+        }
+        P.len() - 1
+    }
+
+    #[test]
+    fn mh_chains_visit_states_in_proportion_to_i_times_p() {
+        // 20000 independent chains from state 0, 40 steps each (burn-in), final states counted.
+        let mut counts = [0u64; 6];
+        for c in 0..20_000u64 {
+            let mut r = rng(&[c, 77]);
+            let mut s = 0usize;
+            for _ in 0..40 {
+                let j = draw_p(&mut r);
+                if mh_accept(I[s], I[j], r.random()) {
+                    s = j;
+                }
+            }
+            counts[s] += 1;
+        }
+        let x = chi2(&counts, &target());
+        assert!(
+            x < CHI2_5_999,
+            "chi-square {x}: counts {counts:?} against {:?}",
+            target()
+        );
+        // A wrong acceptance (say min(1, I/I') or always accept) fails the same test.
+        let mut wrong = [0u64; 6];
+        for c in 0..20_000u64 {
+            let mut r = rng(&[c, 78]);
+            let mut s = 0usize;
+            for _ in 0..40 {
+                let j = draw_p(&mut r);
+                if mh_accept(I[j], I[s], r.random()) {
+                    s = j;
+                }
+            }
+            wrong[s] += 1;
+        }
+        assert!(chi2(&wrong, &target()) > 100.0);
+    }
+
+    #[test]
+    fn cdf_draws_match_i_times_p() {
+        // Candidates drawn from p (M = 2000), then N = 64 stratified CDF draws, repeated.
+        let mut counts = [0u64; 6];
+        for rep in 0..400u64 {
+            let mut r = rng(&[rep, 99]);
+            let cands: Vec<usize> = (0..2000).map(|_| draw_p(&mut r)).collect();
+            let w: Vec<f32> = cands.iter().map(|&c| I[c]).collect();
+            for i in cdf_draw(&w, 64, &mut r) {
+                counts[cands[i]] += 1;
+            }
+        }
+        let x = chi2(&counts, &target());
+        assert!(
+            x < CHI2_5_999,
+            "chi-square {x}: counts {counts:?} against {:?}",
+            target()
+        );
     }
 }
