@@ -54,6 +54,44 @@ fn bench(c: &mut Criterion) {
         b.iter(|| irad::vpl::trace_paths(&f, &tr, 1, 0, 1024))
     });
     g.finish();
+    // Importance: every candidate against every camera point, one visibility ray each pair
+    // that contributes (counted as pairs).
+    let points = irad::vpl::importance::camera_points(&f, &tr, 256, 256, 256, 1, 0);
+    let cands = irad::vpl::trace_paths(&f, &tr, 1, 0, 400);
+    let mut g = c.benchmark_group("importance");
+    g.throughput(Throughput::Elements((cands.len() * points.len()) as u64));
+    g.bench_function(
+        format!("{}_vpls_x_{}_points", cands.len(), points.len()),
+        |b| b.iter(|| irad::vpl::importance::importance_all(&cands, &points, &tr, 0.07)),
+    );
+    g.finish();
+    // One sampler step of each kind at 256 slots, 1024 candidates, 256 camera points.
+    use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams};
+    let params = |kind| SamplerParams {
+        kind,
+        slots: 256,
+        candidates: 1024,
+        camera_points: 256,
+        eps: 0.05,
+        mh_rate: 1.0,
+        dmin: 0.07,
+        seed: 1,
+        width: 256,
+        height: 256,
+    };
+    let mut g = c.benchmark_group("sampler_step");
+    for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {
+        let mut s = Sampler::new(params(kind));
+        s.select(&f, &tr, 0);
+        let mut frame_index = 1;
+        g.bench_function(format!("{kind:?}").to_lowercase(), |b| {
+            b.iter(|| {
+                frame_index += 1;
+                s.select(&f, &tr, frame_index)
+            })
+        });
+    }
+    g.finish();
     let s = irad::reference::Settings {
         width: 32,
         height: 32,

@@ -53,6 +53,8 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Samplers x VPL counts on one animation against a cached reference: metrics, charts, report.html
+    Compare(irad::report::compare::CompareOpts),
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value = "auto")]
@@ -86,6 +88,7 @@ fn main() {
             reference,
             out,
         } => irad::commands::metrics(&test, &reference, out.as_deref()).map(|_| ()),
+        Command::Compare(opts) => irad::report::compare::compare(&opts),
         Command::Info { backend } => irad::commands::info(backend),
         Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
     };

@@ -1,5 +1,9 @@
 //! Stage 8: output. Frame files, progress bars, and the run record (`run.json`).
 
+pub mod charts;
+pub mod compare;
+pub mod html;
+
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;

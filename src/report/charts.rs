@@ -1,0 +1,174 @@
+//! Charts (plotters): SVG for the report page, PNG beside it. Text is drawn with DejaVu Sans,
+//! embedded (assets/), so PNG charts need no system fonts.
+
+use anyhow::{anyhow, Result};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::sync::Once;
+
+const W: u32 = 760;
+const H: u32 = 440;
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            include_bytes!("../../assets/DejaVuSans.ttf"),
+        );
+    });
+}
+
+/// A named series of (x, y) points.
+pub struct Series {
+    pub label: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// What kind of chart.
+pub enum Kind {
+    /// Lines through each series' points.
+    Lines,
+    /// One marker per point, labelled with its series, log-log axes.
+    Scatter,
+}
+
+pub struct Chart<'a> {
+    pub title: &'a str,
+    pub x: &'a str,
+    pub y: &'a str,
+    pub kind: Kind,
+    pub series: &'a [Series],
+}
+
+fn color(i: usize) -> RGBColor {
+    const P: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+    ];
+    P[i % P.len()]
+}
+
+fn bounds(series: &[Series], log: bool) -> ((f64, f64), (f64, f64)) {
+    let pts = series
+        .iter()
+        .flat_map(|s| s.points.iter())
+        .filter(|p| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0)));
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for p in pts {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.1);
+        y1 = y1.max(p.1);
+    }
+    if !x0.is_finite() {
+        return ((0.0, 1.0), (0.0, 1.0));
+    }
+    let pad = |a: f64, b: f64| {
+        if log {
+            (a / 1.5, b * 1.5)
+        } else {
+            let d = (b - a).max(1e-9 * b.abs().max(1.0));
+            (
+                (a - 0.05 * d).min(if a >= 0.0 { 0.0 } else { a - 0.05 * d }),
+                b + 0.08 * d,
+            )
+        }
+    };
+    (pad(x0, x1), pad(y0, y1))
+}
+
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing a chart: {e:?}");
+    root.fill(&WHITE).map_err(e)?;
+    let log = matches!(c.kind, Kind::Scatter);
+    let ((x0, x1), (y0, y1)) = bounds(c.series, log);
+    let mut b = ChartBuilder::on(&root);
+    b.caption(c.title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70);
+    macro_rules! body {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(c.x)
+                .y_desc(c.y)
+                .label_style(("sans-serif", 13))
+                .axis_desc_style(("sans-serif", 15))
+                .draw()
+                .map_err(e)?;
+            for (i, s) in c.series.iter().enumerate() {
+                let col = color(i);
+                let pts: Vec<(f64, f64)> = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|p| {
+                        p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0))
+                    })
+                    .collect();
+                match c.kind {
+                    Kind::Lines => chart
+                        .draw_series(LineSeries::new(pts, col.stroke_width(2)))
+                        .map_err(e)?,
+                    Kind::Scatter => chart
+                        .draw_series(pts.into_iter().map(|p| Circle::new(p, 6, col.filled())))
+                        .map_err(e)?,
+                }
+                .label(s.label.clone())
+                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(e)?;
+        }};
+    }
+    if log {
+        body!(b
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(e)?);
+    } else {
+        body!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(e)?);
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// Draws a chart as SVG text and as an RGB PNG image.
+pub fn render(c: &Chart) -> Result<(String, image::RgbImage)> {
+    register_font();
+    let mut svg = String::new();
+    draw(
+        SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area(),
+        c,
+    )?;
+    let mut buf = vec![0u8; (W * H * 3) as usize];
+    draw(
+        BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area(),
+        c,
+    )?;
+    let png = image::RgbImage::from_raw(W, H, buf).ok_or_else(|| anyhow!("chart buffer size"))?;
+    Ok((svg, png))
+}

@@ -1,0 +1,176 @@
+//! `irad compare` end to end, and its report.html in a real browser (headless Chromium).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("irad-report-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn chromium() -> Option<&'static str> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|c| {
+            Command::new(c)
+                .arg("--version")
+                .output()
+                .map(|o| o.status.success())
+                .unwrap_or(false)
+        })
+}
+
+fn headless(browser: &str, profile: &Path, extra: &[&str], page: &Path) -> std::process::Output {
+    Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--virtual-time-budget=10000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(format!("file://{}", page.display()))
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
+    let out = tmp("out");
+    let cache = tmp("cache");
+    let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args([
+            "compare",
+            "cornell-box",
+            "--size",
+            "32x32",
+            "--frames",
+            "0..4",
+            "--vpls",
+            "16,32",
+            "--spp",
+            "4",
+        ])
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--cache",
+            cache.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // One CSV row per run and frame: 3 samplers x 2 VPL counts x 4 frames.
+    let csv = std::fs::read_to_string(out.join("metrics.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3 * 2 * 4, "{csv}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(json["runs"].as_array().unwrap().len(), 6);
+    for chart in [
+        "speed_accuracy",
+        "speed_flicker",
+        "flicker",
+        "relmse",
+        "replaced",
+    ] {
+        for ext in ["svg", "png"] {
+            let p = out.join("charts").join(format!("{chart}.{ext}"));
+            assert!(
+                p.metadata().map(|m| m.len() > 1000).unwrap_or(false),
+                "{} missing or empty",
+                p.display()
+            );
+        }
+    }
+    // The reference is cached: a second run with the same settings renders no reference frame.
+    let folders: Vec<PathBuf> = std::fs::read_dir(cache.join("reference"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(folders.len(), 1);
+    let frame = folders[0].join("frame_0002.exr");
+    let before = frame.metadata().unwrap().modified().unwrap();
+    let again = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args([
+            "compare",
+            "cornell-box",
+            "--size",
+            "32x32",
+            "--frames",
+            "0..4",
+            "--vpls",
+            "16",
+            "--samplers",
+            "uniform",
+            "--spp",
+            "4",
+        ])
+        .args([
+            "--out",
+            tmp("again").to_str().unwrap(),
+            "--cache",
+            cache.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    assert_eq!(
+        frame.metadata().unwrap().modified().unwrap(),
+        before,
+        "the cached reference was rendered again"
+    );
+
+    let page = out.join("report.html");
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Chromium (.ci/run installs it)"
+        );
+        eprintln!("SKIPPED the browser check: no chromium here (apt-get install chromium)");
+        return;
+    };
+    let profile = tmp("profile");
+    let dom = headless(browser, &profile, &["--dump-dom"], &page);
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    let check = dom
+        .split("id=\"check\">")
+        .nth(1)
+        .and_then(|s| s.split('<').next())
+        .unwrap_or("");
+    assert!(
+        check.starts_with("report-ok"),
+        "the page's own check says: '{check}'"
+    );
+    assert!(
+        check.contains("broken=0") && check.contains("charts=5"),
+        "{check}"
+    );
+    // 1 reference + 3 samplers x (frames + error) = 7 images.
+    assert!(check.contains("images=7"), "{check}");
+    let shot = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-screenshot.png");
+    let s = headless(
+        browser,
+        &profile,
+        &[
+            "--window-size=1400,2400",
+            &format!("--screenshot={}", shot.display()),
+        ],
+        &page,
+    );
+    assert!(
+        s.status.success() && shot.exists(),
+        "no screenshot: {}",
+        String::from_utf8_lossy(&s.stderr)
+    );
+    println!("screenshot: {}", shot.display());
+    let _ = std::fs::remove_dir_all(&profile);
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&cache);
+}

@@ -1,0 +1,173 @@
+//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf` and `mh` must
+//! average to what `uniform` averages to, and `mh` must keep most of its VPLs from frame to frame.
+
+use glam::Vec3;
+use irad::math::luminance;
+use irad::reference::twin;
+use irad::scene::builtin;
+use irad::trace::Tracer;
+use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams};
+
+const W: u32 = 12;
+const H: u32 = 12;
+const DMIN: f32 = 0.1;
+
+fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
+    SamplerParams {
+        kind,
+        slots: 32,
+        candidates: 128,
+        camera_points: 64,
+        eps: 0.05,
+        mh_rate: 1.0,
+        dmin: DMIN,
+        seed,
+        width: W,
+        height: H,
+    }
+}
+
+/// The four image quadrants' mean indirect luminance of one estimate.
+fn quadrants(img: &irad::image::Hdr) -> [f64; 4] {
+    let mut q = [0.0f64; 4];
+    for y in 0..H {
+        for x in 0..W {
+            q[((y >= H / 2) as usize) * 2 + (x >= W / 2) as usize] +=
+                luminance(img.at(x, y)) as f64;
+        }
+    }
+    q.map(|v| v / (W * H / 4) as f64)
+}
+
+struct Estimates {
+    mean: [f64; 4],
+    se: [f64; 4],
+}
+
+/// Mean and standard error of per-frame estimates; with `batches`, by batch means (for
+/// correlated chains).
+fn stats(samples: &[[f64; 4]], batches: usize) -> Estimates {
+    let groups: Vec<[f64; 4]> = samples
+        .chunks(samples.len() / batches)
+        .filter(|c| c.len() == samples.len() / batches)
+        .map(|c| {
+            let mut m = [0.0; 4];
+            for s in c {
+                for k in 0..4 {
+                    m[k] += s[k] / c.len() as f64;
+                }
+            }
+            m
+        })
+        .collect();
+    let n = groups.len() as f64;
+    let mut mean = [0.0; 4];
+    let mut se = [0.0; 4];
+    for k in 0..4 {
+        mean[k] = groups.iter().map(|g| g[k]).sum::<f64>() / n;
+        let var = groups.iter().map(|g| (g[k] - mean[k]).powi(2)).sum::<f64>() / (n - 1.0);
+        se[k] = (var / n).sqrt();
+    }
+    Estimates { mean, se }
+}
+
+fn run(kind: SamplerKind, frames: u64, skip: u64) -> Vec<[f64; 4]> {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let points = twin::pixel_points(&frame, &tracer, W, H);
+    let mut s = Sampler::new(params(kind, 11));
+    (0..frames)
+        .filter_map(|f| {
+            let sel = s.select(&frame, &tracer, f);
+            (f >= skip).then(|| {
+                quadrants(&twin::gather(
+                    &frame,
+                    &tracer,
+                    &points,
+                    W,
+                    H,
+                    &sel.shaded,
+                    DMIN,
+                ))
+            })
+        })
+        .collect()
+}
+
+/// On a fixed frame, the averages of many cdf estimates and of many mh chain steps (after
+/// burn-in) equal the uniform estimator's, per image quadrant, within 4 standard errors.
+#[test]
+fn cdf_and_mh_average_to_the_uniform_estimate() {
+    let uniform = stats(&run(SamplerKind::Uniform, 240, 0), 240);
+    let cdf = stats(&run(SamplerKind::Cdf, 240, 0), 240);
+    let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
+    for k in 0..4 {
+        for (name, e) in [("cdf", &cdf), ("mh", &mh)] {
+            let z = (e.mean[k] - uniform.mean[k]).abs()
+                / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
+            println!(
+                "quadrant {k}: {name} {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
+                e.mean[k], e.se[k], uniform.mean[k], uniform.se[k]
+            );
+            assert!(
+                z < 4.0,
+                "{name} quadrant {k}: {} vs uniform {} (z = {z})",
+                e.mean[k],
+                uniform.mean[k]
+            );
+        }
+        // The test has the power to see a wrong weight: leaving out M/K (about 2.4 here) is
+        // far outside the bound.
+        let wrong = cdf.mean[k] * 0.7;
+        assert!(
+            (wrong - uniform.mean[k]).abs()
+                > 4.0 * (cdf.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
+        );
+    }
+}
+
+/// Coherence on the still Cornell view: mh keeps most slots (fewer still with a lower
+/// proposal rate), cdf replaces nearly all.
+#[test]
+fn mh_keeps_vpls_cdf_replaces_them() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let mean_replaced = |p: SamplerParams| {
+        let mut s = Sampler::new(p);
+        let r: Vec<f32> = (0..30)
+            .map(|f| s.select(&frame, &tracer, f).replaced)
+            .collect();
+        assert_eq!(r[0], 1.0, "the first frame fills every slot");
+        r[1..].iter().sum::<f32>() / (r.len() - 1) as f32
+    };
+    let cdf = mean_replaced(params(SamplerKind::Cdf, 3));
+    let mh = mean_replaced(params(SamplerKind::Mh, 3));
+    let lazy = mean_replaced(SamplerParams {
+        mh_rate: 0.2,
+        ..params(SamplerKind::Mh, 3)
+    });
+    println!("replaced per frame: cdf {cdf:.3}, mh {mh:.3}, mh at rate 0.2 {lazy:.3}");
+    assert!(cdf > 0.95, "cdf replaced {cdf}");
+    assert!(mh < 0.75 && mh > 0.2, "mh replaced {mh}");
+    assert!(lazy < 0.2, "mh at rate 0.2 replaced {lazy}");
+    let _ = Vec3::ZERO;
+}
+
+/// A kept slot keeps its VPL's identity and, in a still scene, its exact position and weight's
+/// inputs: the MH selection is a pure function of (seed, frame) and the chain state.
+#[test]
+fn samplers_are_deterministic() {
+    let scene = builtin::load("cornell-orbit").unwrap().unwrap();
+    let tracer = Tracer::new(&scene.at(0.0));
+    for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {
+        let mut a = Sampler::new(params(kind, 5));
+        let mut b = Sampler::new(params(kind, 5));
+        for f in 0..4 {
+            let frame = scene.at(f as f32 / 24.0);
+            let (x, y) = (a.select(&frame, &tracer, f), b.select(&frame, &tracer, f));
+            assert_eq!(x.shaded, y.shaded, "{kind:?} frame {f}");
+        }
+    }
+}
