@@ -54,6 +54,20 @@ pub fn frame_error(test: &Hdr, reference: &Hdr) -> Result<FrameError> {
     })
 }
 
+/// Mean LDR FLIP (NVIDIA's perceptual error, 0 = same) of the tone-mapped images
+/// (exposure 1, sRGB) at the default 67 pixels per degree.
+pub fn flip(test: &Hdr, reference: &Hdr) -> Result<f64> {
+    same_size(test, reference)?;
+    let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &test.to_srgb8(1.0));
+    let r = nv_flip::FlipImageRgb8::with_data(
+        reference.width,
+        reference.height,
+        &reference.to_srgb8(1.0),
+    );
+    let map = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE).to_vec();
+    Ok(map.iter().map(|&v| v as f64).sum::<f64>() / map.len().max(1) as f64)
+}
+
 /// Luminance error image `e = lum(I) - lum(R)`.
 fn error_image(test: &Hdr, reference: &Hdr) -> Vec<f64> {
     test.data
@@ -73,6 +87,8 @@ pub struct FrameMetrics {
     pub flicker: Option<f64>,
     /// `sqrt(mean_p (e_t - e_{t-1})^2)`.
     pub flicker_rms: Option<f64>,
+    /// Mean LDR FLIP against the reference.
+    pub flip: f64,
 }
 
 /// Metrics of a whole sequence.
@@ -82,6 +98,7 @@ pub struct SequenceMetrics {
     pub mean_rel_mse: f64,
     pub mean_rmse: f64,
     pub mean_bias: f64,
+    pub mean_flip: f64,
     /// F1: mean over frame pairs of `mean_p |e_t - e_{t-1}|`: change the reference lacks.
     pub flicker_f1: f64,
     /// RMS of the frame-to-frame error change.
@@ -124,11 +141,13 @@ pub fn sequence(numbers: &[u32], test: &[Hdr], reference: &[Hdr]) -> Result<Sequ
             sum_e[i] += x;
             sum_e2[i] += x * x;
         }
+        let flip = flip(t, r)?;
         out.frames.push(FrameMetrics {
             frame: f,
             error,
             flicker,
             flicker_rms,
+            flip,
         });
         prev = Some(e);
     }
@@ -136,6 +155,7 @@ pub fn sequence(numbers: &[u32], test: &[Hdr], reference: &[Hdr]) -> Result<Sequ
     out.mean_rel_mse = out.frames.iter().map(|f| f.error.rel_mse).sum::<f64>() / n;
     out.mean_rmse = out.frames.iter().map(|f| f.error.rmse).sum::<f64>() / n;
     out.mean_bias = out.frames.iter().map(|f| f.error.bias).sum::<f64>() / n;
+    out.mean_flip = out.frames.iter().map(|f| f.flip).sum::<f64>() / n;
     let pairs: Vec<&FrameMetrics> = out.frames.iter().filter(|f| f.flicker.is_some()).collect();
     if !pairs.is_empty() {
         out.flicker_f1 =
@@ -261,7 +281,7 @@ mod tests {
         let m = sequence(&[0, 1, 2, 3, 4], &t, &r).unwrap();
         assert_eq!(m.flicker_f1, 0.0);
         assert_eq!(m.temporal_variance, 0.0);
-        assert!(m.temporal_bias > 0.0 && m.mean_rel_mse > 0.0);
+        assert!(m.temporal_bias > 0.0 && m.mean_rel_mse > 0.0 && m.mean_flip > 0.0);
     }
 
     #[test]
@@ -296,8 +316,8 @@ mod tests {
             .collect();
         let m = sequence(&(0..8).collect::<Vec<_>>(), &frames, &frames.clone()).unwrap();
         assert_eq!(
-            (m.flicker_f1, m.mean_rel_mse, m.temporal_bias),
-            (0.0, 0.0, 0.0)
+            (m.flicker_f1, m.mean_rel_mse, m.temporal_bias, m.mean_flip),
+            (0.0, 0.0, 0.0, 0.0)
         );
         // The same gradient against a still reference does flicker.
         let still: Vec<Hdr> = (0..8).map(|_| frames[0].clone()).collect();

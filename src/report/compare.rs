@@ -288,12 +288,12 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
 
     // Tables.
     let mut csv = String::from(
-        "scene,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flicker,replaced,acceptance\n",
+        "scene,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flip,flicker,replaced,acceptance\n",
     );
     for r in &records {
         for (i, fm) in r.metrics.frames.iter().enumerate() {
             csv += &format!(
-                "{spec},{},{},{},{:.6},{:.8},{:.8},{:.8},{},{:.4},{}\n",
+                "{spec},{},{},{},{:.6},{:.8},{:.8},{:.8},{:.6},{},{:.4},{}\n",
                 format!("{:?}", r.sampler).to_lowercase(),
                 r.vpls,
                 fm.frame,
@@ -301,6 +301,7 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
                 fm.error.rel_mse,
                 fm.error.rmse,
                 fm.error.bias,
+                fm.flip,
                 fm.flicker.map(|x| format!("{x:.8}")).unwrap_or_default(),
                 r.replaced[i],
                 r.acceptance[i]
@@ -422,6 +423,7 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
             label: label(r.sampler, r.vpls),
             seconds: r.mean_seconds,
             rel_mse: r.metrics.mean_rel_mse,
+            flip: r.metrics.mean_flip,
             flicker: r.metrics.flicker_f1,
             replaced: r.mean_replaced,
             acceptance: r.mean_acceptance,
@@ -438,15 +440,16 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
 
     println!("{}", notes.join("\n"));
     println!(
-        "{:14} {:>10} {:>10} {:>10} {:>10} {:>10}",
-        "run", "s/frame", "relMSE", "flicker", "replaced", "accept"
+        "{:14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10}",
+        "run", "s/frame", "relMSE", "FLIP", "flicker", "replaced", "accept"
     );
     for r in &rows {
         println!(
-            "{:14} {:>10.3} {:>10.5} {:>10.5} {:>10.3} {:>10}",
+            "{:14} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.3} {:>10}",
             r.label,
             r.seconds,
             r.rel_mse,
+            r.flip,
             r.flicker,
             r.replaced,
             r.acceptance

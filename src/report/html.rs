@@ -9,6 +9,7 @@ pub struct Row {
     pub label: String,
     pub seconds: f64,
     pub rel_mse: f64,
+    pub flip: f64,
     pub flicker: f64,
     pub replaced: f64,
     pub acceptance: Option<f64>,
@@ -56,13 +57,14 @@ th{background:#eee}td:first-child{text-align:left}.charts{display:flex;flex-wrap
     for n in notes {
         h += &format!("<li>{}</li>\n", esc(n));
     }
-    h += "</ul>\n<h2>Summary</h2>\n<table><tr><th>run</th><th>s / frame</th><th>relMSE</th><th>flicker F1</th><th>VPLs replaced / frame</th><th>MH acceptance</th></tr>\n";
+    h += "</ul>\n<h2>Summary</h2>\n<table><tr><th>run</th><th>s / frame</th><th>relMSE</th><th>FLIP</th><th>flicker F1</th><th>VPLs replaced / frame</th><th>MH acceptance</th></tr>\n";
     for r in rows {
         h += &format!(
-            "<tr><td>{}</td><td>{:.3}</td><td>{:.5}</td><td>{:.5}</td><td>{:.3}</td><td>{}</td></tr>\n",
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.5}</td><td>{:.4}</td><td>{:.5}</td><td>{:.3}</td><td>{}</td></tr>\n",
             esc(&r.label),
             r.seconds,
             r.rel_mse,
+            r.flip,
             r.flicker,
             r.replaced,
             r.acceptance.map(|a| format!("{a:.3}")).unwrap_or_else(|| "-".into())
