@@ -71,6 +71,18 @@ fn paraboloid_texel(d: vec3f, n: vec3f, size: u32) -> u32 {
     return u32(t.y) * size + u32(t.x);
 }
 
+// The unit normal `n` turned to face the camera at `cam` from surface point `x` (surfaces
+// reflect on both sides).
+fn facing(n: vec3f, x: vec3f, cam: vec3f) -> vec3f {
+    return select(n, -n, dot(n, cam - x) < 0.0);
+}
+
+// tan of the angle whose cosine is `c` (> 0), capped at 4: how steeply depth changes across a
+// texel on a receiver seen at that angle.
+fn slope(c: f32) -> f32 {
+    return min(sqrt(max(1.0 - c * c, 0.0)) / c, 4.0);
+}
+
 // An ISM pyramid value `depth + 4 * level` (>= 0): its level and normalized depth.
 fn ism_level(v: f32) -> f32 {
     return floor(v * 0.25);

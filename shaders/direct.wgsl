@@ -37,10 +37,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    var n = tri.n.xyz;
-    if dot(n, P.cam_pos.xyz - x) < 0.0 {
-        n = -n;
-    }
+    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
     let size = f32(P.shadow_size);
     var sum = vec3f(0.0);
     for (var j = 0u; j < P.num_light_samples; j++) {
@@ -59,7 +56,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         let fc = face_coords(l);
         let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * size)), vec2i(0), vec2i(i32(P.shadow_size) - 1));
         let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u + u32(fc.x)), 0).x);
-        let tan_x = min(sqrt(max(1.0 - cos_x * cos_x, 0.0)) / cos_x, 4.0);
+        let tan_x = slope(cos_x);
         let bias = P.shadow_bias * dist * (2.0 / size) * (1.0 + tan_x) + P.near;
         if stored > 0.0 && stored < dist - bias {
             continue;

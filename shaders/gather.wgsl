@@ -21,10 +21,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    var n = tri.n.xyz;
-    if dot(n, P.cam_pos.xyz - x) < 0.0 {
-        n = -n;
-    }
+    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
     let texel_angle = 4.0 / f32(P.ism_size);
     var sum = vec3f(0.0);
     for (var i = 0u; i < P.num_vpls; i++) {
@@ -42,7 +39,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         if stored >= 0.0 {
             // The footprint of the level the depth came from (filled holes: a coarser one).
             let footprint = dist * texel_angle * exp2(ism_level(stored));
-            let tan_x = min(sqrt(max(1.0 - cos_x * cos_x, 0.0)) / cos_x, 4.0);
+            let tan_x = slope(cos_x);
             let bias = P.ism_bias * footprint * (1.0 + tan_x) / P.far;
             if dist / P.far > ism_depth(stored) + bias {
                 continue;

@@ -1,11 +1,10 @@
 //! Compose pass (`shaders/compose.wgsl`): emission + direct + indirect into the HDR frame,
 //! then exposure and sRGB into the 8-bit preview.
 
-use super::{dispatch, storage_entry, texture_entry, uniform_entry, Gpu};
+use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
 
 pub struct Compose {
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
+    pass: PixelPass,
     pub hdr: wgpu::Buffer,
     pub ldr: wgpu::Buffer,
 }
@@ -20,9 +19,13 @@ impl Compose {
         indirect: &wgpu::Buffer,
         pixels: u64,
     ) -> Self {
-        let module = gpu.shader("compose", include_str!("../../shaders/compose.wgsl"));
-        let layout = gpu.layout(
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let hdr = gpu.buffer("hdr", pixels * 16, usage);
+        let ldr = gpu.buffer("ldr", pixels * 4, usage);
+        let pass = PixelPass::new(
+            gpu,
             "compose",
+            include_str!("../../shaders/compose.wgsl"),
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
                 storage_entry(1, true),
@@ -32,14 +35,6 @@ impl Compose {
                 storage_entry(5, false),
                 storage_entry(6, false),
             ],
-        );
-        let pipeline = gpu.compute_pipeline("compose", &module, "main", &[&layout]);
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let hdr = gpu.buffer("hdr", pixels * 16, usage);
-        let ldr = gpu.buffer("ldr", pixels * 4, usage);
-        let group = gpu.bind(
-            "compose",
-            &layout,
             &[
                 params.as_entire_binding(),
                 tris.as_entire_binding(),
@@ -50,21 +45,10 @@ impl Compose {
                 ldr.as_entire_binding(),
             ],
         );
-        Compose {
-            pipeline,
-            group,
-            hdr,
-            ldr,
-        }
+        Compose { pass, hdr, ldr }
     }
 
     pub fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {
-        dispatch(
-            enc,
-            "compose",
-            &self.pipeline,
-            &[&self.group],
-            (width.div_ceil(8), height.div_ceil(8), 1),
-        );
+        self.pass.encode(enc, width, height);
     }
 }

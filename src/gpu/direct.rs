@@ -1,11 +1,10 @@
 //! Direct-light pass (`shaders/direct.wgsl`): stratified emitter samples with shadow
 //! hemicube visibility. Its CPU twin is `reference::twin::direct`.
 
-use super::{dispatch, storage_entry, texture_entry, uniform_entry, Gpu};
+use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
 
 pub struct Direct {
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
+    pass: PixelPass,
     pub output: wgpu::Buffer,
 }
 
@@ -19,9 +18,15 @@ impl Direct {
         gbuf: &wgpu::TextureView,
         pixels: u64,
     ) -> Self {
-        let module = gpu.shader("direct", include_str!("../../shaders/direct.wgsl"));
-        let layout = gpu.layout(
+        let output = gpu.buffer(
             "direct",
+            pixels * 16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let pass = PixelPass::new(
+            gpu,
+            "direct",
+            include_str!("../../shaders/direct.wgsl"),
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
                 storage_entry(1, true),
@@ -30,16 +35,6 @@ impl Direct {
                 texture_entry(4, wgpu::TextureViewDimension::D2),
                 storage_entry(5, false),
             ],
-        );
-        let pipeline = gpu.compute_pipeline("direct", &module, "main", &[&layout]);
-        let output = gpu.buffer(
-            "direct",
-            pixels * 16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        );
-        let group = gpu.bind(
-            "direct",
-            &layout,
             &[
                 params.as_entire_binding(),
                 tris.as_entire_binding(),
@@ -49,20 +44,10 @@ impl Direct {
                 output.as_entire_binding(),
             ],
         );
-        Direct {
-            pipeline,
-            group,
-            output,
-        }
+        Direct { pass, output }
     }
 
     pub fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {
-        dispatch(
-            enc,
-            "direct",
-            &self.pipeline,
-            &[&self.group],
-            (width.div_ceil(8), height.div_ceil(8), 1),
-        );
+        self.pass.encode(enc, width, height);
     }
 }

@@ -1,11 +1,10 @@
 //! Gather pass (`shaders/gather.wgsl`): indirect light of all VPLs per pixel with ISM
 //! visibility. Its CPU twin, with ray-traced visibility, is `reference::twin::gather`.
 
-use super::{dispatch, storage_entry, texture_entry, uniform_entry, Gpu};
+use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
 
 pub struct Gather {
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
+    pass: PixelPass,
     pub output: wgpu::Buffer,
 }
 
@@ -19,9 +18,15 @@ impl Gather {
         gbuf: &wgpu::TextureView,
         pixels: u64,
     ) -> Self {
-        let module = gpu.shader("gather", include_str!("../../shaders/gather.wgsl"));
-        let layout = gpu.layout(
+        let output = gpu.buffer(
+            "indirect",
+            pixels * 16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let pass = PixelPass::new(
+            gpu,
             "gather",
+            include_str!("../../shaders/gather.wgsl"),
             &[
                 uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
                 storage_entry(1, true),
@@ -30,16 +35,6 @@ impl Gather {
                 texture_entry(4, wgpu::TextureViewDimension::D2),
                 storage_entry(5, false),
             ],
-        );
-        let pipeline = gpu.compute_pipeline("gather", &module, "main", &[&layout]);
-        let output = gpu.buffer(
-            "indirect",
-            pixels * 16,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        );
-        let group = gpu.bind(
-            "gather",
-            &layout,
             &[
                 params.as_entire_binding(),
                 tris.as_entire_binding(),
@@ -49,20 +44,10 @@ impl Gather {
                 output.as_entire_binding(),
             ],
         );
-        Gather {
-            pipeline,
-            group,
-            output,
-        }
+        Gather { pass, output }
     }
 
     pub fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {
-        dispatch(
-            enc,
-            "gather",
-            &self.pipeline,
-            &[&self.group],
-            (width.div_ceil(8), height.div_ceil(8), 1),
-        );
+        self.pass.encode(enc, width, height);
     }
 }

@@ -434,3 +434,40 @@ pub(crate) fn dispatch(
     }
     pass.dispatch_workgroups(xyz.0, xyz.1, xyz.2);
 }
+
+/// A compute pass with one invocation per pixel (8x8 workgroups) and one bind group: the
+/// shape of the gather, direct and compose passes.
+pub(crate) struct PixelPass {
+    label: &'static str,
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+}
+
+impl PixelPass {
+    /// `entries[i]` describes `resources[i]` at binding i.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        label: &'static str,
+        wgsl: &str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+        resources: &[wgpu::BindingResource],
+    ) -> Self {
+        let module = gpu.shader(label, wgsl);
+        let layout = gpu.layout(label, entries);
+        PixelPass {
+            label,
+            pipeline: gpu.compute_pipeline(label, &module, "main", &[&layout]),
+            group: gpu.bind(label, &layout, resources),
+        }
+    }
+
+    pub(crate) fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {
+        dispatch(
+            enc,
+            self.label,
+            &self.pipeline,
+            &[&self.group],
+            (width.div_ceil(8), height.div_ceil(8), 1),
+        );
+    }
+}

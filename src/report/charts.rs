@@ -30,7 +30,7 @@ pub struct Series {
 pub enum Kind {
     /// Lines through each series' points.
     Lines,
-    /// One marker per point, labelled with its series, log-log axes.
+    /// One marker per point, coloured by its series (linear axes from 0).
     Scatter,
 }
 
@@ -54,6 +54,20 @@ fn color(i: usize) -> RGBColor {
         RGBColor(127, 127, 127),
     ];
     P[i % P.len()]
+}
+
+/// A tick label with three significant digits.
+fn short(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e4).contains(&a) {
+        let digits = (2 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.1e}")
+    }
 }
 
 fn bounds(series: &[Series], log: bool) -> ((f64, f64), (f64, f64)) {
@@ -80,11 +94,10 @@ fn bounds(series: &[Series], log: bool) -> ((f64, f64), (f64, f64)) {
         if log {
             (a / 1.5, b * 1.5)
         } else {
-            let d = (b - a).max(1e-9 * b.abs().max(1.0));
-            (
-                (a - 0.05 * d).min(if a >= 0.0 { 0.0 } else { a - 0.05 * d }),
-                b + 0.08 * d,
-            )
+            // Non-negative data starts at 0; the top gets 8% of the span as headroom.
+            let lo = if a >= 0.0 { 0.0 } else { a - 0.05 * (b - a) };
+            let d = (b - lo).max(1e-9 * b.abs().max(1.0));
+            (lo, b + 0.08 * d)
         }
     };
     (pad(x0, x1), pad(y0, y1))
@@ -96,7 +109,7 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing a chart: {e:?}");
     root.fill(&WHITE).map_err(e)?;
-    let log = matches!(c.kind, Kind::Scatter);
+    let log = false;
     let ((x0, x1), (y0, y1)) = bounds(c.series, log);
     let mut b = ChartBuilder::on(&root);
     b.caption(c.title, ("sans-serif", 20))
@@ -110,6 +123,10 @@ where
                 .configure_mesh()
                 .x_desc(c.x)
                 .y_desc(c.y)
+                .x_labels(10)
+                .y_labels(10)
+                .x_label_formatter(&|v| short(*v))
+                .y_label_formatter(&|v| short(*v))
                 .label_style(("sans-serif", 13))
                 .axis_desc_style(("sans-serif", 15))
                 .draw()
@@ -140,7 +157,11 @@ where
                 .background_style(WHITE.mix(0.85))
                 .border_style(BLACK)
                 .label_font(("sans-serif", 13))
-                .position(SeriesLabelPosition::UpperRight)
+                .position(if log || matches!(c.kind, Kind::Scatter) {
+                    SeriesLabelPosition::LowerLeft
+                } else {
+                    SeriesLabelPosition::UpperRight
+                })
                 .draw()
                 .map_err(e)?;
         }};

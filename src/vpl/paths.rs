@@ -31,29 +31,6 @@ pub struct Vpl {
     pub tri: u32,
 }
 
-impl Vpl {
-    /// Outgoing radiance at receiver `x` (normal `nx`, albedo `rho_x`) from this VPL, without
-    /// visibility, with the distance clamped at `dmin`:
-    /// `Phi * rho_y/pi * rho_x/pi * cos_y cos_x / max(d^2, dmin^2)`.
-    pub fn contribution(&self, x: Vec3, nx: Vec3, rho_x: Vec3, dmin: f32) -> Vec3 {
-        let d = self.position - x;
-        let d2 = d.length_squared();
-        if d2 <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let w = d / d2.sqrt();
-        let cos_x = nx.dot(w);
-        let cos_y = -self.normal.dot(w);
-        if cos_x <= 0.0 || cos_y <= 0.0 {
-            return Vec3::ZERO;
-        }
-        self.power
-            * self.albedo
-            * rho_x
-            * (cos_x * cos_y / (std::f32::consts::PI.powi(2) * d2.max(dmin * dmin)))
-    }
-}
-
 /// Traces light path `path` of stream `seed` in `frame`, returning its VPLs (possibly none).
 pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<Vpl> {
     let mut out = Vec::new();
