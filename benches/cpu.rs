@@ -56,7 +56,7 @@ fn bench(c: &mut Criterion) {
     g.finish();
     // Importance: every candidate against every camera point, one visibility ray each pair
     // that contributes (counted as pairs).
-    let points = irad::vpl::importance::camera_points(&f, &tr, 256, 256, 256, 1, 0);
+    let points = irad::vpl::importance::camera_points(&f, &tr, 256, 256, 256, 1);
     let cands = irad::vpl::trace_paths(&f, &tr, 1, 0, 400);
     let mut g = c.benchmark_group("importance");
     g.throughput(Throughput::Elements((cands.len() * points.len()) as u64));
@@ -74,6 +74,7 @@ fn bench(c: &mut Criterion) {
         camera_points: 256,
         eps: 0.05,
         mh_rate: 1.0,
+        mh_escape: 0,
         dmin: 0.07,
         seed: 1,
         width: 256,

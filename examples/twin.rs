@@ -35,6 +35,7 @@ fn main() -> anyhow::Result<()> {
         camera_points: 256,
         eps: 0.05,
         mh_rate: 1.0,
+        mh_escape: 0,
         dmin: 0.2,
         seed: 1,
         fps: 24.0,

@@ -182,6 +182,9 @@ pub struct RenderOpts {
     /// VPLs longer, at the cost of following a moving view more slowly)
     #[arg(long, default_value_t = 1.0)]
     pub mh_rate: f32,
+    /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
+    #[arg(long, default_value_t = 8)]
+    pub mh_escape: u32,
     /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: crate::gpu::BackendChoice,
@@ -271,6 +274,7 @@ impl RenderOpts {
             camera_points: self.camera_points,
             eps: self.eps,
             mh_rate: self.mh_rate,
+            mh_escape: self.mh_escape,
             dmin,
             seed: self.scene.seed,
             fps: self.scene.fps,

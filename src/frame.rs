@@ -22,6 +22,8 @@ pub struct Settings {
     pub eps: f32,
     /// MH: probability that a chain proposes in a frame.
     pub mh_rate: f32,
+    /// MH: extra proposals for a chain whose VPL no camera point sees.
+    pub mh_escape: u32,
     /// Distance clamp of the VPL contribution, in scene units.
     pub dmin: f32,
     pub seed: u64,
@@ -73,6 +75,7 @@ impl Pipeline {
             camera_points: settings.camera_points as usize,
             eps: settings.eps,
             mh_rate: settings.mh_rate,
+            mh_escape: settings.mh_escape,
             dmin: settings.dmin,
             seed: settings.seed,
             width: c.width,

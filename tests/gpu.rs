@@ -49,6 +49,7 @@ fn pipeline(scene: &str, cfg: RendererConfig, dmin: f32, backend: BackendChoice)
         camera_points: 64,
         eps: 0.05,
         mh_rate: 1.0,
+        mh_escape: 0,
         dmin,
         seed: 1,
         fps: 24.0,

@@ -20,6 +20,7 @@ fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
         camera_points: 64,
         eps: 0.05,
         mh_rate: 1.0,
+        mh_escape: 0,
         dmin: DMIN,
         seed,
         width: W,
@@ -72,11 +73,15 @@ fn stats(samples: &[[f64; 4]], batches: usize) -> Estimates {
 }
 
 fn run(kind: SamplerKind, frames: u64, skip: u64) -> Vec<[f64; 4]> {
+    run_with(params(kind, 11), frames, skip)
+}
+
+fn run_with(p: SamplerParams, frames: u64, skip: u64) -> Vec<[f64; 4]> {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
     let points = twin::pixel_points(&frame, &tracer, W, H);
-    let mut s = Sampler::new(params(kind, 11));
+    let mut s = Sampler::new(p);
     (0..frames)
         .filter_map(|f| {
             let sel = s.select(&frame, &tracer, f);
@@ -102,8 +107,19 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
     let uniform = stats(&run(SamplerKind::Uniform, 240, 0), 240);
     let cdf = stats(&run(SamplerKind::Cdf, 240, 0), 240);
     let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
+    let escape = stats(
+        &run_with(
+            SamplerParams {
+                mh_escape: 8,
+                ..params(SamplerKind::Mh, 12)
+            },
+            420,
+            20,
+        ),
+        20,
+    );
     for k in 0..4 {
-        for (name, e) in [("cdf", &cdf), ("mh", &mh)] {
+        for (name, e) in [("cdf", &cdf), ("mh", &mh), ("mh escape 8", &escape)] {
             let z = (e.mean[k] - uniform.mean[k]).abs()
                 / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
             println!(

@@ -43,6 +43,9 @@ pub struct CompareOpts {
     /// MH: probability that a chain proposes in a frame
     #[arg(long, default_value_t = 1.0)]
     pub mh_rate: f32,
+    /// MH: extra proposals for a chain whose VPL no camera point sees
+    #[arg(long, default_value_t = 8)]
+    pub mh_escape: u32,
     /// The VPL count whose animations the report shows [default: the middle one]
     #[arg(long)]
     pub show_vpls: Option<u32>,
@@ -140,6 +143,7 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
     defaults.scene = o.scene.clone();
     defaults.backend = o.backend;
     defaults.mh_rate = o.mh_rate;
+    defaults.mh_escape = o.mh_escape;
     defaults.exposure = o.exposure;
     let gpu = crate::gpu::Gpu::new(o.backend)?;
     for &v in &o.vpls {
@@ -315,7 +319,7 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
         format!("scene {spec}, frames {}..{} at {} fps, {}", frames.start, frames.end, o.scene.fps, o.scene.size),
         format!("reference: CPU path tracer, {} spp, seed {}", o.spp, o.scene.seed),
         format!("adapter: {adapter}; CPU threads: {}", rayon::current_num_threads()),
-        format!("MH proposal rate {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference)", o.mh_rate),
+        format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference)", o.mh_rate, o.mh_escape),
     ];
     super::write_json(
         &o.out.join("metrics.json"),

@@ -1,7 +1,10 @@
 //! Stages 3 and 5: camera points and the importance of a VPL.
 //!
 //! Camera points are K surface points seen through jittered, stratified pixels of the frame's
-//! camera (a low-resolution G-buffer on the CPU), deterministic for (seed, frame). A VPL's
+//! camera (a low-resolution G-buffer on the CPU), deterministic for (seed, frame). The jitter
+//! is the same in every frame: in a still view a kept VPL's importance does not change, and in
+//! a moving one the points move with the camera, so importance changes only as the view does
+//! (fresh jitter each frame would make every kept VPL's weight wobble). A VPL's
 //! importance is its clamped contribution's luminance summed over them, with ray-traced
 //! visibility: `I(v) = sum_k lum(C_v(x_k))`. Samplers add the defensive floor `eps * mean(I)`.
 
@@ -30,12 +33,11 @@ pub fn camera_points(
     height: u32,
     k: usize,
     seed: u64,
-    frame_index: u64,
 ) -> Vec<CameraPoint> {
     let aspect = width as f32 / height as f32;
     let gx = ((k as f32 * aspect).sqrt().round() as usize).max(1);
     let gy = k.div_ceil(gx).max(1);
-    let mut r = rng(&[seed, frame_index, 0xca3e]);
+    let mut r = rng(&[seed, 0xca3e]);
     let jitter: Vec<Vec2> = (0..gx * gy)
         .map(|_| Vec2::new(r.random(), r.random()))
         .collect();

@@ -10,7 +10,12 @@
 //! - `mh`: N independent Metropolis-Hastings chains, one per slot, one step a frame: re-trace
 //!   the slot's path in the new frame, re-evaluate its I under the new camera, propose a
 //!   uniformly chosen candidate of the frame (an independence proposal from p), accept with
-//!   `min(1, I'/I)`; weight `b / (N I) * (M / K)`. Chains start from a CDF draw.
+//!   `min(1, I'/I)`; weight `b / (N I) * (M / K)`. Chains start from a CDF draw. Escape
+//!   (`mh_escape` > 0): a chain whose VPL no camera point sees (I at the floor) makes up to
+//!   that many more proposals in the frame and takes the first one some camera point sees.
+//!   Without it, when the view changes abruptly (through a door), many chains land on hidden
+//!   VPLs at once, where the proposals (mostly hidden too) keep them for frames, each with the
+//!   floor's large weight, and ISM light leaks times that weight shows as bright flashes.
 //!
 //! I always includes the defensive floor `eps * mean(I over the candidates)`.
 
@@ -49,6 +54,8 @@ pub struct SamplerParams {
     pub eps: f32,
     /// MH: probability that a chain proposes in a frame (1: one step a frame).
     pub mh_rate: f32,
+    /// MH: extra proposals a frame for a chain whose VPL no camera point sees.
+    pub mh_escape: u32,
     pub dmin: f32,
     pub seed: u64,
     /// The image the camera points stratify.
@@ -205,7 +212,7 @@ impl Sampler {
             };
         }
         let t = Instant::now();
-        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed, f);
+        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
         let c = self.candidates(frame, tracer, f, &points);
         if c.vpls.is_empty() {
             self.slots.clear();
@@ -243,17 +250,26 @@ impl Sampler {
                 let u: f32 = r.random();
                 let propose = r.random::<f32>() < p.mh_rate || cur.is_none();
                 proposals += propose as usize;
-                match cur {
-                    Some((v, i)) if !propose || !mh_accept(i, c.importance[j], u) => {
-                        chosen.push(v);
-                        imp.push(i);
-                    }
+                let (mut v, mut i) = match cur {
+                    Some((v, i)) if !propose || !mh_accept(i, c.importance[j], u) => (v, i),
                     _ => {
                         accepted += 1;
-                        chosen.push(c.vpls[j]);
-                        imp.push(c.importance[j]);
+                        (c.vpls[j], c.importance[j])
+                    }
+                };
+                // Escape: a chain on a VPL no camera point sees (I at the floor) tries up to
+                // `mh_escape` more proposals this frame and takes the first that is seen.
+                if i <= c.floor {
+                    for _ in 0..p.mh_escape {
+                        let k = r.random_range(0..c.vpls.len());
+                        if c.importance[k] > c.floor {
+                            (v, i) = (c.vpls[k], c.importance[k]);
+                            break;
+                        }
                     }
                 }
+                chosen.push(v);
+                imp.push(i);
             }
             (chosen, imp, Some(accepted as f32 / proposals.max(1) as f32))
         } else {
