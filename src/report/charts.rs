@@ -30,7 +30,7 @@ pub struct Series {
 pub enum Kind {
     /// Lines through each series' points.
     Lines,
-    /// One marker per point, coloured by its series (linear axes from 0).
+    /// One marker per point, coloured by its series.
     Scatter,
 }
 
@@ -43,7 +43,8 @@ pub struct Chart<'a> {
 }
 
 fn color(i: usize) -> RGBColor {
-    const P: [RGBColor; 8] = [
+    // Tableau 20: 20 distinct colours before any repeats.
+    const P: [RGBColor; 20] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -52,6 +53,18 @@ fn color(i: usize) -> RGBColor {
         RGBColor(140, 86, 75),
         RGBColor(227, 119, 194),
         RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 187, 120),
+        RGBColor(152, 223, 138),
+        RGBColor(255, 152, 150),
+        RGBColor(197, 176, 213),
+        RGBColor(196, 156, 148),
+        RGBColor(247, 182, 210),
+        RGBColor(199, 199, 199),
+        RGBColor(219, 219, 141),
+        RGBColor(158, 218, 229),
     ];
     P[i % P.len()]
 }
@@ -70,18 +83,24 @@ fn short(v: f64) -> String {
     }
 }
 
-fn bounds(series: &[Series], log: bool) -> ((f64, f64), (f64, f64)) {
-    let pts = series
+/// Finite points of a series.
+fn finite(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
+    s.points
         .iter()
-        .flat_map(|s| s.points.iter())
-        .filter(|p| p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0)));
+        .copied()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+}
+
+/// Axis ranges of the series, from 0 for non-negative data; `headroom` is the fraction of the
+/// y span added on top (room for the legend).
+fn bounds(series: &[Series], headroom: f64) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
-    for p in pts {
+    for p in series.iter().flat_map(finite) {
         x0 = x0.min(p.0);
         x1 = x1.max(p.0);
         y0 = y0.min(p.1);
@@ -90,17 +109,12 @@ fn bounds(series: &[Series], log: bool) -> ((f64, f64), (f64, f64)) {
     if !x0.is_finite() {
         return ((0.0, 1.0), (0.0, 1.0));
     }
-    let pad = |a: f64, b: f64| {
-        if log {
-            (a / 1.5, b * 1.5)
-        } else {
-            // Non-negative data starts at 0; the top gets 8% of the span as headroom.
-            let lo = if a >= 0.0 { 0.0 } else { a - 0.05 * (b - a) };
-            let d = (b - lo).max(1e-9 * b.abs().max(1.0));
-            (lo, b + 0.08 * d)
-        }
+    let pad = |a: f64, b: f64, top: f64| {
+        let lo = if a >= 0.0 { 0.0 } else { a - 0.05 * (b - a) };
+        let d = (b - lo).max(1e-9 * b.abs().max(1.0));
+        (lo, b + top * d)
     };
-    (pad(x0, x1), pad(y0, y1))
+    (pad(x0, x1, 0.08), pad(y0, y1, headroom))
 }
 
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart) -> Result<()>
@@ -109,70 +123,54 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing a chart: {e:?}");
     root.fill(&WHITE).map_err(e)?;
-    let log = false;
-    let ((x0, x1), (y0, y1)) = bounds(c.series, log);
-    let mut b = ChartBuilder::on(&root);
-    b.caption(c.title, ("sans-serif", 20))
+    // The legend sits top right above the data: for scatter charts that corner (slow and
+    // inaccurate) rarely has a run, and it gets more headroom.
+    let headroom = if matches!(c.kind, Kind::Scatter) {
+        0.6
+    } else {
+        0.25
+    };
+    let ((x0, x1), (y0, y1)) = bounds(c.series, headroom);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(c.title, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
-        .y_label_area_size(70);
-    macro_rules! body {
-        ($chart:expr) => {{
-            let mut chart = $chart;
-            chart
-                .configure_mesh()
-                .x_desc(c.x)
-                .y_desc(c.y)
-                .x_labels(10)
-                .y_labels(10)
-                .x_label_formatter(&|v| short(*v))
-                .y_label_formatter(&|v| short(*v))
-                .label_style(("sans-serif", 13))
-                .axis_desc_style(("sans-serif", 15))
-                .draw()
-                .map_err(e)?;
-            for (i, s) in c.series.iter().enumerate() {
-                let col = color(i);
-                let pts: Vec<(f64, f64)> = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|p| {
-                        p.0.is_finite() && p.1.is_finite() && (!log || (p.0 > 0.0 && p.1 > 0.0))
-                    })
-                    .collect();
-                match c.kind {
-                    Kind::Lines => chart
-                        .draw_series(LineSeries::new(pts, col.stroke_width(2)))
-                        .map_err(e)?,
-                    Kind::Scatter => chart
-                        .draw_series(pts.into_iter().map(|p| Circle::new(p, 6, col.filled())))
-                        .map_err(e)?,
-                }
-                .label(s.label.clone())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 13))
-                .position(if log || matches!(c.kind, Kind::Scatter) {
-                    SeriesLabelPosition::LowerLeft
-                } else {
-                    SeriesLabelPosition::UpperRight
-                })
-                .draw()
-                .map_err(e)?;
-        }};
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc(c.x)
+        .y_desc(c.y)
+        .x_labels(10)
+        .y_labels(10)
+        .x_label_formatter(&|v| short(*v))
+        .y_label_formatter(&|v| short(*v))
+        .label_style(("sans-serif", 13))
+        .axis_desc_style(("sans-serif", 15))
+        .draw()
+        .map_err(e)?;
+    for (i, s) in c.series.iter().enumerate() {
+        let col = color(i);
+        match c.kind {
+            Kind::Lines => chart
+                .draw_series(LineSeries::new(finite(s), col.stroke_width(2)))
+                .map_err(e)?,
+            Kind::Scatter => chart
+                .draw_series(finite(s).map(|p| Circle::new(p, 6, col.filled())))
+                .map_err(e)?,
+        }
+        .label(s.label.clone())
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
     }
-    if log {
-        body!(b
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(e)?);
-    } else {
-        body!(b.build_cartesian_2d(x0..x1, y0..y1).map_err(e)?);
-    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 13))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(e)?;
     root.present().map_err(e)?;
     Ok(())
 }

@@ -76,7 +76,8 @@ pub struct Selection {
     pub acceptance: Option<f32>,
     /// Mean floored importance over the candidates.
     pub b: Option<f32>,
-    /// Seconds spent on camera points and importance.
+    /// Seconds spent on camera points, importance (and, for mh, re-tracing the chains'
+    /// paths) and the sampler's draws, without tracing the candidates' paths.
     pub importance_s: f64,
 }
 
@@ -159,6 +160,8 @@ struct Candidates {
     vpls: Vec<Vpl>,
     importance: Vec<f32>,
     paths: u64,
+    /// Seconds spent tracing the candidates' paths.
+    paths_s: f64,
     /// eps * mean(I), added to every I.
     floor: f32,
     /// Mean floored importance.
@@ -181,7 +184,9 @@ impl Sampler {
         points: &[CameraPoint],
     ) -> Candidates {
         let p = &self.params;
+        let t = Instant::now();
         let (vpls, paths) = fresh_paths(frame, tracer, p.seed, f, p.candidates, false);
+        let paths_s = t.elapsed().as_secs_f64();
         let raw = importance_all(&vpls, points, tracer, p.dmin);
         let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
         let floor = (p.eps as f64 * mean) as f32;
@@ -189,6 +194,7 @@ impl Sampler {
             importance: raw.iter().map(|&x| x + floor).collect(),
             vpls,
             paths,
+            paths_s,
             floor,
             b: (mean * (1.0 + p.eps as f64)) as f32,
         }
@@ -219,7 +225,7 @@ impl Sampler {
             return Selection {
                 paths: c.paths,
                 replaced: 1.0,
-                importance_s: t.elapsed().as_secs_f64(),
+                importance_s: t.elapsed().as_secs_f64() - c.paths_s,
                 ..Default::default()
             };
         }
@@ -301,7 +307,7 @@ impl Sampler {
             replaced,
             acceptance,
             b: Some(c.b),
-            importance_s: t.elapsed().as_secs_f64(),
+            importance_s: t.elapsed().as_secs_f64() - c.paths_s,
         }
     }
 
