@@ -29,15 +29,19 @@ fn main() -> anyhow::Result<()> {
         seed: 1,
     };
     let settings = Settings {
-        sampler: SamplerKind::Uniform,
-        vpls: 256,
-        candidates: 1024,
-        camera_points: 256,
-        eps: 0.05,
-        mh_rate: 1.0,
-        mh_escape: 0,
-        dmin: 0.2,
-        seed: 1,
+        sampler: irad::vpl::sampler::SamplerParams {
+            kind: SamplerKind::Uniform,
+            slots: 256,
+            candidates: 1024,
+            camera_points: 256,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_escape: 0,
+            dmin: 0.2,
+            seed: 1,
+            width: w,
+            height: h,
+        },
         fps: 24.0,
     };
     let mut p = Pipeline::new(scene.clone(), settings, cfg, BackendChoice::Auto)?;

@@ -268,15 +268,19 @@ impl RenderOpts {
             bail!("--candidates {candidates} is out of range (1 to 16777216)");
         }
         Ok(crate::frame::Settings {
-            sampler: self.sampler,
-            vpls: self.vpls,
-            candidates,
-            camera_points: self.camera_points,
-            eps: self.eps,
-            mh_rate: self.mh_rate,
-            mh_escape: self.mh_escape,
-            dmin,
-            seed: self.scene.seed,
+            sampler: crate::vpl::sampler::SamplerParams {
+                kind: self.sampler,
+                slots: self.vpls as usize,
+                candidates: candidates as usize,
+                camera_points: self.camera_points as usize,
+                eps: self.eps,
+                mh_rate: self.mh_rate,
+                mh_escape: self.mh_escape,
+                dmin,
+                seed: self.scene.seed,
+                width: self.scene.size.width,
+                height: self.scene.size.height,
+            },
             fps: self.scene.fps,
         })
     }
@@ -386,7 +390,7 @@ pub fn render(opts: &RenderOpts) -> Result<()> {
         spec,
         opts.scene.size,
         opts.vpls,
-        settings.sampler
+        settings.sampler.kind
     );
     println!(
         "mean seconds per frame: {:.3}",

@@ -9,24 +9,11 @@ use anyhow::Result;
 use serde::Serialize;
 use std::time::Instant;
 
-/// What a sequence is rendered with, besides the GPU sizes.
+/// What a sequence is rendered with, besides the GPU sizes: the sampler (which also holds
+/// the seed and the distance clamp) and the frame rate.
 #[derive(Clone, Debug, Serialize)]
 pub struct Settings {
-    pub sampler: SamplerKind,
-    pub vpls: u32,
-    /// M: candidate VPLs a frame (cdf, mh).
-    pub candidates: u32,
-    /// K: camera points for importance.
-    pub camera_points: u32,
-    /// Defensive floor factor of the importance.
-    pub eps: f32,
-    /// MH: probability that a chain proposes in a frame.
-    pub mh_rate: f32,
-    /// MH: extra proposals for a chain whose VPL no camera point sees.
-    pub mh_escape: u32,
-    /// Distance clamp of the VPL contribution, in scene units.
-    pub dmin: f32,
-    pub seed: u64,
+    pub sampler: SamplerParams,
     pub fps: f32,
 }
 
@@ -67,20 +54,7 @@ impl Pipeline {
         let frame0 = scene.at(0.0);
         let renderer = Renderer::new(gpu, config, &frame0)?;
         let tracer = Tracer::new(&frame0);
-        let c = &renderer.config;
-        let sampler = Sampler::new(SamplerParams {
-            kind: settings.sampler,
-            slots: settings.vpls as usize,
-            candidates: settings.candidates as usize,
-            camera_points: settings.camera_points as usize,
-            eps: settings.eps,
-            mh_rate: settings.mh_rate,
-            mh_escape: settings.mh_escape,
-            dmin: settings.dmin,
-            seed: settings.seed,
-            width: c.width,
-            height: c.height,
-        });
+        let sampler = Sampler::new(settings.sampler.clone());
         Ok(Pipeline {
             scene,
             settings,
@@ -93,12 +67,12 @@ impl Pipeline {
     /// Renders frame `f` (at time f / fps). With `components`, the direct and indirect
     /// images come back too.
     pub fn render_frame(&mut self, f: u32, components: bool) -> Result<FrameOutput> {
-        let s = &self.settings;
+        let s = &self.settings.sampler;
         let start = Instant::now();
         let mut stages = Vec::new();
         let mut t = Instant::now();
         // 1. The scene at time t.
-        let frame = self.scene.at(f as f32 / s.fps);
+        let frame = self.scene.at(f as f32 / self.settings.fps);
         lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
         self.tracer.update(&frame);

@@ -8,6 +8,7 @@ use irad::image::Hdr;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
+use irad::vpl::sampler::SamplerParams;
 
 /// The backends to test: every one of Vulkan and GL that has a usable adapter here.
 fn backends() -> Vec<BackendChoice> {
@@ -43,15 +44,19 @@ fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> RendererConfig {
 fn pipeline(scene: &str, cfg: RendererConfig, dmin: f32, backend: BackendChoice) -> Pipeline {
     let scene = builtin::load(scene).unwrap().unwrap();
     let settings = Settings {
-        sampler: SamplerKind::Uniform,
-        vpls: cfg.max_vpls,
-        candidates: cfg.max_vpls * 4,
-        camera_points: 64,
-        eps: 0.05,
-        mh_rate: 1.0,
-        mh_escape: 0,
-        dmin,
-        seed: 1,
+        sampler: SamplerParams {
+            kind: SamplerKind::Uniform,
+            slots: cfg.max_vpls as usize,
+            candidates: cfg.max_vpls as usize * 4,
+            camera_points: 64,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_escape: 0,
+            dmin,
+            seed: 1,
+            width: cfg.width,
+            height: cfg.height,
+        },
         fps: 24.0,
     };
     Pipeline::new(scene, settings, cfg, backend).unwrap()
