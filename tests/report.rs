@@ -41,11 +41,9 @@ fn headless(browser: &str, profile: &Path, extra: &[&str], page: &Path) -> std::
         .unwrap()
 }
 
-#[test]
-fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
-    let out = tmp("out");
-    let cache = tmp("cache");
-    let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+/// `irad compare cornell-box` on 4 small frames with a 4-spp reference, plus `extra`.
+fn compare(extra: &[&str], out: &Path, cache: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_irad"))
         .args([
             "compare",
             "cornell-box",
@@ -53,11 +51,10 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
             "32x32",
             "--frames",
             "0..4",
-            "--vpls",
-            "16,32",
             "--spp",
             "4",
         ])
+        .args(extra)
         .args([
             "--out",
             out.to_str().unwrap(),
@@ -65,7 +62,14 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
             cache.to_str().unwrap(),
         ])
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
+    let out = tmp("out");
+    let cache = tmp("cache");
+    let o = compare(&["--vpls", "16,32"], &out, &cache);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     // One CSV row per run and frame: 3 samplers x 2 VPL counts x 4 frames.
     let csv = std::fs::read_to_string(out.join("metrics.csv")).unwrap();
@@ -97,29 +101,12 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
     assert_eq!(folders.len(), 1);
     let frame = folders[0].join("frame_0002.exr");
     let before = frame.metadata().unwrap().modified().unwrap();
-    let again = Command::new(env!("CARGO_BIN_EXE_irad"))
-        .args([
-            "compare",
-            "cornell-box",
-            "--size",
-            "32x32",
-            "--frames",
-            "0..4",
-            "--vpls",
-            "16",
-            "--samplers",
-            "uniform",
-            "--spp",
-            "4",
-        ])
-        .args([
-            "--out",
-            tmp("again").to_str().unwrap(),
-            "--cache",
-            cache.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let again_out = tmp("again");
+    let again = compare(
+        &["--vpls", "16", "--samplers", "uniform"],
+        &again_out,
+        &cache,
+    );
     assert!(again.status.success());
     assert_eq!(
         frame.metadata().unwrap().modified().unwrap(),
@@ -173,4 +160,5 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
     let _ = std::fs::remove_dir_all(&profile);
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_dir_all(&cache);
+    let _ = std::fs::remove_dir_all(&again_out);
 }
