@@ -133,8 +133,8 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
                 uniform.mean[k]
             );
         }
-        // The test has the power to see a wrong weight: leaving out M/K (about 2.4 here) is
-        // far outside the bound.
+        // The test has the power to see a wrong weight: one 30% too low (leaving out M/P
+        // would be a factor of about 2.4) falls far outside the bound.
         let wrong = cdf.mean[k] * 0.7;
         assert!(
             (wrong - uniform.mean[k]).abs()

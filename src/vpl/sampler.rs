@@ -3,14 +3,14 @@
 //!
 //! - `uniform`: Keller's instant radiosity: fresh light paths until the slots are full, each
 //!   VPL weighted 1 / (paths used).
-//! - `cdf`: M fresh candidates a frame (the VPLs of K paths), N drawn by stratified inverse
-//!   transform of the CDF of I, weight `b / (N I(v)) * (M / K)` with `b` the mean of I over
-//!   the candidates. (M / K turns "one candidate" into "one path's share": the candidates of K
-//!   paths sum, divided by K, to the uniform estimator.)
+//! - `cdf`: M fresh candidates a frame (the VPLs of P paths), N drawn by stratified inverse
+//!   transform of the CDF of I, weight `b / (N I(v)) * (M / P)` with `b` the mean of I over
+//!   the candidates. (M / P turns "one candidate" into "one path's share": the candidates of P
+//!   paths sum, divided by P, to the uniform estimator.)
 //! - `mh`: N independent Metropolis-Hastings chains, one per slot, one step a frame: re-trace
 //!   the slot's path in the new frame, re-evaluate its I under the new camera, propose a
 //!   uniformly chosen candidate of the frame (an independence proposal from p), accept with
-//!   `min(1, I'/I)`; weight `b / (N I) * (M / K)`. Chains start from a CDF draw. Escape
+//!   `min(1, I'/I)`; weight `b / (N I) * (M / P)`. Chains start from a CDF draw. Escape
 //!   (`mh_escape` > 0): a chain whose VPL no camera point sees (I at the floor) makes up to
 //!   that many more proposals in the frame and takes the first one some camera point sees.
 //!   Without it, when the view changes abruptly (through a door), many chains land on hidden
