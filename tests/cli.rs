@@ -218,3 +218,76 @@ fn render_rejects_bad_arguments_before_rendering() {
     std::fs::remove_file(&file).unwrap();
     let _ = std::fs::remove_dir_all(&out);
 }
+
+#[test]
+fn metrics_compares_folders_and_names_bad_files() {
+    use glam::Vec3;
+    use irad::image::Hdr;
+    let root = tmp("metrics");
+    let (test, reference) = (root.join("test"), root.join("ref"));
+    std::fs::create_dir_all(&test).unwrap();
+    std::fs::create_dir_all(&reference).unwrap();
+    let img = |v: f32, w: u32| Hdr {
+        width: w,
+        height: 2,
+        data: vec![Vec3::splat(v); (w * 2) as usize],
+    };
+    // The test alternates by +-0.1 around a still reference: F1 = 0.2 exactly.
+    for f in 0..4u32 {
+        img(0.5, 3)
+            .write_exr(&reference.join(format!("frame_{f:04}.exr")))
+            .unwrap();
+        img(if f % 2 == 0 { 0.6 } else { 0.4 }, 3)
+            .write_exr(&test.join(format!("frame_{f:04}.exr")))
+            .unwrap();
+    }
+    let o = irad(&[
+        "metrics",
+        test.to_str().unwrap(),
+        reference.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(test.join("metrics.json")).unwrap()).unwrap();
+    assert!(
+        (m["flicker_f1"].as_f64().unwrap() - 0.2).abs() < 1e-5,
+        "{}",
+        m["flicker_f1"]
+    );
+    assert_eq!(
+        std::fs::read_to_string(test.join("metrics.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        5
+    );
+
+    let fails = |why: &str, file: &str| {
+        let o = irad(&[
+            "metrics",
+            test.to_str().unwrap(),
+            reference.to_str().unwrap(),
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains(file),
+            "{why}: expected {file} in: {e}"
+        );
+    };
+    // A reference frame of another size.
+    img(0.5, 4)
+        .write_exr(&reference.join("frame_0002.exr"))
+        .unwrap();
+    fails("mismatched size", "frame_0002.exr");
+    img(0.5, 3)
+        .write_exr(&reference.join("frame_0002.exr"))
+        .unwrap();
+    // A test frame without a reference frame.
+    img(0.5, 3).write_exr(&test.join("frame_0004.exr")).unwrap();
+    fails("missing frame", "frame_0004.exr");
+    std::fs::remove_file(test.join("frame_0004.exr")).unwrap();
+    // An unreadable file.
+    std::fs::write(reference.join("frame_0001.exr"), b"not an image").unwrap();
+    fails("unreadable", "frame_0001.exr");
+    std::fs::remove_dir_all(&root).unwrap();
+}
