@@ -43,6 +43,12 @@ impl Hdr {
             .collect()
     }
 
+    /// The tone-mapped preview as an 8-bit RGB image.
+    pub fn to_rgb_image(&self, exposure: f32) -> image::RgbImage {
+        image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(exposure))
+            .expect("width x height x 3 bytes")
+    }
+
     /// Writes linear float RGB as OpenEXR.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         let flat: Vec<f32> = self.data.iter().flat_map(|c| c.to_array()).collect();
@@ -56,8 +62,7 @@ impl Hdr {
 
     /// Writes the tone-mapped preview as PNG.
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
-        let img = image::RgbImage::from_raw(self.width, self.height, self.to_srgb8(exposure))
-            .context("image size")?;
+        let img = self.to_rgb_image(exposure);
         atomic_write(path, |tmp| {
             img.save_with_format(tmp, image::ImageFormat::Png)
                 .map_err(anyhow::Error::from)

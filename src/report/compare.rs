@@ -114,10 +114,6 @@ fn error_image(t: &Hdr, r: &Hdr) -> image::RgbImage {
     image::RgbImage::from_raw(t.width, t.height, data).expect("sizes match")
 }
 
-fn ldr(h: &Hdr, exposure: f32) -> image::RgbImage {
-    image::RgbImage::from_raw(h.width, h.height, h.to_srgb8(exposure)).expect("w*h*3")
-}
-
 fn gif_bytes(frames: &[image::RgbImage], fps: f32, dir: &Path, name: &str) -> Result<Vec<u8>> {
     let path = dir.join(name);
     super::write_gif(&path, frames, fps)?;
@@ -213,7 +209,7 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
         gif: gif_bytes(
             &reference
                 .iter()
-                .map(|h| ldr(h, o.exposure))
+                .map(|h| h.to_rgb_image(o.exposure))
                 .collect::<Vec<_>>(),
             o.scene.fps,
             &o.out,
@@ -245,7 +241,10 @@ pub fn compare(o: &CompareOpts) -> Result<()> {
                 clips.push(html::Clip {
                     label: label(s, v),
                     gif: gif_bytes(
-                        &imgs.iter().map(|h| ldr(h, o.exposure)).collect::<Vec<_>>(),
+                        &imgs
+                            .iter()
+                            .map(|h| h.to_rgb_image(o.exposure))
+                            .collect::<Vec<_>>(),
                         o.scene.fps,
                         &o.out,
                         &format!("{name}.gif"),

@@ -5,7 +5,7 @@
 //! from a stream seeded by (seed, path id) alone, so a path kept by a sampler can be traced
 //! again in the next frame and lands where the moved scene sends it.
 
-use crate::math::{cosine_hemisphere, luminance, rng, triangle_barycentrics};
+use crate::math::{cosine_hemisphere, rng, triangle_barycentrics};
 use crate::scene::Frame;
 use crate::trace::Tracer;
 use glam::{Vec2, Vec3};
@@ -87,14 +87,10 @@ pub fn trace_paths(frame: &Frame, tracer: &Tracer, seed: u64, first: u64, count:
         .collect()
 }
 
-/// Luminance of a VPL's re-emitted power, the usual measure of its strength.
-pub fn strength(v: &Vpl) -> f32 {
-    luminance(v.power * v.albedo)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::luminance;
     use crate::scene::builtin;
 
     #[test]

@@ -356,40 +356,35 @@ mod tests {
         P.len() - 1
     }
 
-    #[test]
-    fn mh_chains_visit_states_in_proportion_to_i_times_p() {
-        // 20000 independent chains from state 0, 40 steps each (burn-in), final states counted.
+    /// Final states of 20000 independent chains from state 0 after 40 steps (burn-in), each
+    /// step proposing from p and moving when `accept(current, proposal, u)` says so.
+    fn final_states(stream: u64, accept: impl Fn(usize, usize, f32) -> bool) -> [u64; 6] {
         let mut counts = [0u64; 6];
         for c in 0..20_000u64 {
-            let mut r = rng(&[c, 77]);
+            let mut r = rng(&[c, stream]);
             let mut s = 0usize;
             for _ in 0..40 {
                 let j = draw_p(&mut r);
-                if mh_accept(I[s], I[j], r.random()) {
+                if accept(s, j, r.random()) {
                     s = j;
                 }
             }
             counts[s] += 1;
         }
+        counts
+    }
+
+    #[test]
+    fn mh_chains_visit_states_in_proportion_to_i_times_p() {
+        let counts = final_states(77, |cur, prop, u| mh_accept(I[cur], I[prop], u));
         let x = chi2(&counts, &target());
         assert!(
             x < CHI2_5_999,
             "chi-square {x}: counts {counts:?} against {:?}",
             target()
         );
-        // A wrong acceptance (say min(1, I/I') or always accept) fails the same test.
-        let mut wrong = [0u64; 6];
-        for c in 0..20_000u64 {
-            let mut r = rng(&[c, 78]);
-            let mut s = 0usize;
-            for _ in 0..40 {
-                let j = draw_p(&mut r);
-                if mh_accept(I[j], I[s], r.random()) {
-                    s = j;
-                }
-            }
-            wrong[s] += 1;
-        }
+        // A wrong acceptance (min(1, I/I') instead of min(1, I'/I)) fails the same test.
+        let wrong = final_states(78, |cur, prop, u| mh_accept(I[prop], I[cur], u));
         assert!(chi2(&wrong, &target()) > 100.0);
     }
 
