@@ -9,6 +9,7 @@ pub mod gpu;
 pub mod image;
 pub mod math;
 pub mod metrics;
+pub mod radiosity;
 pub mod reference;
 pub mod report;
 pub mod scene;
