@@ -7,6 +7,7 @@ pub mod direct;
 pub mod gather;
 pub mod gbuffer;
 pub mod ism;
+pub mod radiosity;
 pub mod renderer;
 pub mod shadow;
 

@@ -65,7 +65,8 @@ pub fn direct_at(tracer: &Tracer, lights: &[EmitterSample], x: Vec3, n: Vec3, rh
 pub struct View {
     pub width: u32,
     pub height: u32,
-    /// Jittered camera rays per pixel.
+    /// Jittered camera rays per pixel; 0: one ray through each pixel's centre (what the
+    /// GPU pass rasterizes).
     pub spp: u32,
     /// Emitter samples for direct light ([`Part::Indirect`] only).
     pub light_samples: usize,
@@ -96,8 +97,12 @@ pub fn render_cpu(frame: &Frame, scene: &Tracer, shaded: &Shaded, v: &View) -> H
             for (x, px) in row.iter_mut().enumerate() {
                 let mut r = rng(&[seed, (y as u64) << 32 | x as u64, 0x7ad]);
                 let mut sum = Vec3::ZERO;
-                for _ in 0..spp {
-                    let p = Vec2::new(x as f32 + r.random::<f32>(), y as f32 + r.random::<f32>());
+                for _ in 0..spp.max(1) {
+                    let p = if spp == 0 {
+                        Vec2::new(x as f32 + 0.5, y as f32 + 0.5)
+                    } else {
+                        Vec2::new(x as f32 + r.random::<f32>(), y as f32 + r.random::<f32>())
+                    };
                     let dir = frame.camera.ray_dir(p, width, height);
                     let Some(h) =
                         shaded

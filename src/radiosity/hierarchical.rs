@@ -37,7 +37,7 @@ impl From<&Settings> for Params {
         Params {
             top_size: s.element_size * 4.0,
             min_size: s.element_size / 4.0,
-            eps: 0.02 * s.refine_threshold,
+            eps: 0.5 * s.refine_threshold,
             tolerance: s.tolerance,
             quality: Quality { points: 4, rays: 4 },
         }

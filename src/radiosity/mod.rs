@@ -179,7 +179,7 @@ impl Default for Settings {
             max_elements: 6000,
             refine_rounds: 2,
             refine_threshold: 0.1,
-            tolerance: 2e-3,
+            tolerance: 1e-2,
             rays: 400_000,
             seed: 1,
         }
