@@ -234,11 +234,110 @@ pub fn solve(frame: &Frame, tracer: &Tracer, s: &Settings) -> Solution {
     sol
 }
 
+/// A solution kept while the geometry and the emitters stay still: a moving camera reuses
+/// it (radiosity is view-independent), a moving object or light solves again.
+#[derive(Default)]
+pub struct Cache {
+    key: Option<(Vec<[Vec3; 3]>, Vec<u32>)>,
+    solution: Option<Solution>,
+    /// Solves run so far.
+    pub solves: usize,
+}
+
+impl Cache {
+    /// The solution for `frame`, solving only if its triangles or materials changed since
+    /// the last call. Returns it and whether it was solved now.
+    pub fn get(&mut self, frame: &Frame, tracer: &Tracer, s: &Settings) -> (&Solution, bool) {
+        let same = self
+            .key
+            .as_ref()
+            .is_some_and(|(t, m)| *t == frame.tris && *m == frame.tri_material);
+        if !same || self.solution.is_none() {
+            self.solution = Some(solve(frame, tracer, s));
+            self.key = Some((frame.tris.clone(), frame.tri_material.clone()));
+            self.solves += 1;
+        }
+        (self.solution.as_ref().expect("solved above"), !same)
+    }
+}
+
 fn progressive_params(s: &Settings) -> progressive::Params {
     progressive::Params {
         tolerance: s.tolerance,
         max_shots: usize::MAX,
         bright: form_factor::Quality { points: 4, rays: 7 },
         dim: form_factor::Quality { points: 1, rays: 4 },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    #[test]
+    fn cache_solves_again_only_when_geometry_or_lights_move() {
+        let s = Settings {
+            element_size: 0.6,
+            refine_rounds: 0,
+            tolerance: 0.05,
+            ..Settings::default()
+        };
+        let orbit = builtin::load("cornell-orbit").unwrap().unwrap();
+        let mut cache = Cache::default();
+        for t in [0.0, 0.5, 1.0] {
+            let f = orbit.at(t);
+            let tr = Tracer::new(&f);
+            let (_, solved) = cache.get(&f, &tr, &s);
+            assert_eq!(solved, t == 0.0, "camera motion at t = {t}");
+        }
+        assert_eq!(cache.solves, 1);
+        let light = builtin::load("cornell-light").unwrap().unwrap();
+        let mut cache = Cache::default();
+        for t in [0.0, 0.5, 1.0] {
+            let f = light.at(t);
+            let tr = Tracer::new(&f);
+            assert!(cache.get(&f, &tr, &s).1, "the light moved at t = {t}");
+        }
+        assert_eq!(cache.solves, 3);
+    }
+
+    #[test]
+    fn empty_scene_and_no_emitters_solve_to_nothing_without_panicking() {
+        let mut f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let tr = Tracer::new(&f);
+        for method in [
+            Method::Progressive,
+            Method::Hierarchical,
+            Method::Stochastic,
+        ] {
+            let s = Settings {
+                method,
+                element_size: 0.6,
+                refine_rounds: 1,
+                rays: 10_000,
+                ..Settings::default()
+            };
+            // No emission: everything black, finite.
+            let mut dark = f.clone();
+            let mats: Vec<crate::scene::Material> = dark
+                .materials
+                .iter()
+                .map(|m| crate::scene::Material {
+                    emission: Vec3::ZERO,
+                    ..m.clone()
+                })
+                .collect();
+            dark.materials = std::sync::Arc::new(mats);
+            let sol = solve(&dark, &tr, &s);
+            assert!(sol.radiance.iter().all(|l| *l == Vec3::ZERO), "{method:?}");
+            // Empty scene.
+            f.tris.clear();
+            f.normals.clear();
+            f.areas.clear();
+            f.tri_material.clear();
+            let sol = solve(&f, &tr, &s);
+            assert!(sol.radiance.is_empty() && sol.mesh.is_empty(), "{method:?}");
+        }
     }
 }
