@@ -73,6 +73,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.dont_write_bytecode = True  # no benches/__pycache__ in the work tree
 import mitsuba_cornell  # noqa: E402
 
 SCENE = "cornell-orbit"
