@@ -197,6 +197,7 @@ def run(spp_list, repeat=3, size=256, ref_spp=2048, out="out/bench/mitsuba", ira
         print(f"irad reference ({irad_ref}) mean RGB {np.round(iref.reshape(-1, 3).mean(0), 4).tolist()}, "
               f"relMSE of Mitsuba's reference against it {rel_mse(ref, iref):.5f}")
     rows = []
+    path = os.path.join(out, "mitsuba_cornell.csv")
     print(f"{'spp':>6} {'s min':>8} {'s median':>9} {'s max':>8} {'relMSE':>9} {'relMSE x s':>11} {'load':>5}"
           + ("  relMSE vs irad ref" if iref is not None else ""))
     for spp in spp_list:
@@ -227,14 +228,18 @@ def run(spp_list, repeat=3, size=256, ref_spp=2048, out="out/bench/mitsuba", ira
         print(f"{spp:>6} {min(secs):>8.3f} {row['seconds']:>9.3f} {max(secs):>8.3f} "
               f"{row['rel_mse']:>9.5f} {row['rel_mse'] * row['seconds']:>11.5f} {row['load_1min']:>5.1f}"
               + (f"  {row['rel_mse_vs_irad_ref']:.5f}" if iref is not None else ""), flush=True)
-    path = os.path.join(out, "mitsuba_cornell.csv")
+        write_csv(path, rows)
+    print(f"wrote {path}")
+    return rows
+
+
+def write_csv(path, rows):
+    """Writes the rows so far (after each sample count: an interrupted run keeps them)."""
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
         w.writeheader()
         for row in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in row.items()})
-    print(f"wrote {path}")
-    return rows
 
 
 def read_csv(path):
