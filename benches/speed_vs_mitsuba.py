@@ -105,9 +105,9 @@ def read_json(path):
         die(f"{path}: cannot read ({e})")
 
 
-def reference(irad, out, size, frames, spp):
-    """irad's cached path-traced reference of the frames: its folder."""
-    ref = os.path.join(out, "reference")
+def reference(irad, out, size, frames, spp, given=None):
+    """irad's cached path-traced reference of the frames (or `given`, checked): its folder."""
+    ref = given or os.path.join(out, "reference")
     a, b = frames
     want = {"scene": SCENE, "width": size, "height": size, "spp": spp,
             "frames": list(range(a, b))}
@@ -119,7 +119,12 @@ def reference(irad, out, size, frames, spp):
         if have == want:
             print(f"reference: cached {ref} ({spp} spp, frames {a}..{b})")
             return ref
+        if given:
+            die(f"--ref {given}: its run.json is for {have}, not {want} (unfinished?)")
         print(f"reference: {ref} is for {have}, not {want}: making it again")
+    if given:
+        die(f"--ref {given}: no run.json (make it with `irad reference {SCENE} --size {size}x{size} "
+            f"--frames {a}..{b} --spp {spp} --out {given}`)")
     print(f"reference: irad reference {SCENE} --frames {a}..{b} --spp {spp} "
           f"(several minutes on 2 cores) ...", flush=True)
     s = run_irad(irad, ["reference", SCENE, "--size", f"{size}x{size}", "--frames", f"{a}..{b}",
@@ -128,18 +133,31 @@ def reference(irad, out, size, frames, spp):
     return ref
 
 
-def irad_run(irad, out, size, frames, vpls, rep, ref):
-    """One render + metrics: (marginal s/frame, first frame s, relMSE, wall s)."""
+def irad_render(irad, out, size, frames, vpls, rep, reuse):
+    """One render (or, with `reuse`, a finished one found in its folder): its folder,
+    marginal s/frame, first frame's s and the process's wall s (None if reused)."""
     d = os.path.join(out, f"vpls{vpls}_r{rep}")
     a, b = frames
-    wall = run_irad(irad, ["render", SCENE, "--size", f"{size}x{size}", "--frames", f"{a}..{b}",
-                           "--vpls", str(vpls), "--out", d], d + ".log")
-    run_irad(irad, ["metrics", d, ref], d + ".metrics.log")
-    secs = [f["seconds"] for f in read_json(os.path.join(d, "run.json"))["frames"]]
+    rj = os.path.join(d, "run.json")
+    wall = None
+    done = False
+    if reuse and os.path.exists(rj):
+        r = read_json(rj)
+        done = (r.get("scene") == SCENE and r["gpu"]["width"] == size and r["gpu"]["height"] == size
+                and r["gpu"]["max_vpls"] == vpls and [f["frame"] for f in r["frames"]] == list(range(a, b)))
+    if not done:
+        wall = run_irad(irad, ["render", SCENE, "--size", f"{size}x{size}", "--frames",
+                               f"{a}..{b}", "--vpls", str(vpls), "--out", d], d + ".log")
+    secs = [f["seconds"] for f in read_json(rj)["frames"]]
     if len(secs) < 2:
-        die(f"{d}/run.json: need at least 2 frames for a marginal time, found {len(secs)}")
-    m = read_json(os.path.join(d, "metrics.json"))
-    return statistics.mean(secs[1:]), secs[0], m["mean_rel_mse"], wall
+        die(f"{rj}: need at least 2 frames for a marginal time, found {len(secs)}")
+    return d, statistics.mean(secs[1:]), secs[0], wall
+
+
+def irad_rel_mse(irad, d, ref):
+    """`irad metrics d ref`: the mean relMSE over the frames."""
+    run_irad(irad, ["metrics", d, ref], d + ".metrics.log")
+    return read_json(os.path.join(d, "metrics.json"))["mean_rel_mse"]
 
 
 def mitsuba_seconds_at(rows, target, key="seconds"):
@@ -177,6 +195,10 @@ def main(argv=None):
     p.add_argument("--ref-spp", type=int, default=2048, help="samples of irad's reference")
     p.add_argument("--repeat", type=int, default=3, help="irad runs per VPL count")
     p.add_argument("--out", default="out/bench/speed", help="output folder")
+    p.add_argument("--ref", help="an existing `irad reference` folder to use (checked against "
+                   "the scene, size, frames and spp) instead of OUT/reference")
+    p.add_argument("--reuse", action="store_true",
+                   help="keep finished renders found in OUT (their timings) instead of rendering again")
     p.add_argument("--mitsuba-csv", default=DEFAULT_CSV,
                    help="mitsuba_cornell.py's CSV; made with its defaults if missing")
     a = p.parse_args(argv)
@@ -203,25 +225,26 @@ def main(argv=None):
     for r in mrows:
         print(f"  {int(r['spp']):5} spp  {r['seconds']:7.3f} s  relMSE {r['rel_mse']:.5f}")
 
-    ref = reference(irad, a.out, a.size, frames, a.ref_spp)
     print(f"load average (1 min) before the runs: {os.getloadavg()[0]:.2f}")
-    results = []
+    renders = {}
     for n in vpls:
-        runs = []
         for rep in range(a.repeat):
-            runs.append(irad_run(irad, a.out, a.size, frames, n, rep, ref))
-            m, first, e, wall = runs[-1]
+            d, m, first, wall = irad_render(irad, a.out, a.size, frames, n, rep, a.reuse)
+            renders.setdefault(n, []).append((d, m, first))
+            how = f"process {wall:.1f} s" if wall is not None else "reused"
             print(f"irad {n:5} VPLs run {rep}: {m * 1e3:7.1f} ms/frame (first frame "
-                  f"{first * 1e3:.0f} ms, process {wall:.1f} s), relMSE {e:.5f}, "
-                  f"load {os.getloadavg()[0]:.1f}", flush=True)
-        marg = sorted(r[0] for r in runs)
-        errs = [r[2] for r in runs]
+                  f"{first * 1e3:.0f} ms, {how}), load {os.getloadavg()[0]:.1f}", flush=True)
+    print(f"load average (1 min) after the runs: {os.getloadavg()[0]:.2f}")
+    ref = reference(irad, a.out, a.size, frames, a.ref_spp, a.ref)
+    results = []
+    for n, runs in renders.items():
+        errs = [irad_rel_mse(irad, d, ref) for d, _, _ in runs]
         if max(errs) - min(errs) > 1e-9:
             print(f"note: relMSE differs between runs ({min(errs):.6f} to {max(errs):.6f}); the mean is used")
+        marg = sorted(r[1] for r in runs)
         results.append({"vpls": n, "s_min": marg[0], "s_median": statistics.median(marg),
-                        "s_max": marg[-1], "first_s": statistics.median(r[1] for r in runs),
+                        "s_max": marg[-1], "first_s": statistics.median(r[2] for r in runs),
                         "rel_mse": statistics.mean(errs)})
-    print(f"load average (1 min) after the runs: {os.getloadavg()[0]:.2f}")
 
     print()
     print(f"{SCENE} frames {frames[0]}..{frames[1]} at {a.size}x{a.size}, irad reference {a.ref_spp} spp; "
