@@ -58,6 +58,7 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 benches/speed_vs_mitsuba.py [--irad target/release/irad] [--vpls 256,1024,4096]
         [--repeat 3] [--out out/bench/speed] [--mitsuba-csv out/bench/mitsuba/mitsuba_cornell.csv]
+        [--ref DIR] [--reuse]
 
 Writes OUT/speed_vs_mitsuba.csv with the printed table's figures.
 """
