@@ -127,7 +127,7 @@ def reference(irad, out, size, frames, spp, given=None):
         die(f"--ref {given}: no run.json (make it with `irad reference {SCENE} --size {size}x{size} "
             f"--frames {a}..{b} --spp {spp} --out {given}`)")
     print(f"reference: irad reference {SCENE} --frames {a}..{b} --spp {spp} "
-          f"(several minutes on 2 cores) ...", flush=True)
+          f"(10 to 50 minutes on 2 cores) ...", flush=True)
     s = run_irad(irad, ["reference", SCENE, "--size", f"{size}x{size}", "--frames", f"{a}..{b}",
                         "--spp", str(spp), "--out", ref], os.path.join(out, "reference.log"))
     print(f"reference: done in {s:.0f} s")
