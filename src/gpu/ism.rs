@@ -7,20 +7,70 @@
 //! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
 //! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
 
-use super::{dispatch, groups_1d, storage_entry, uniform_entry, Gpu};
+use super::bindings::{bytes, gpu_struct, read, read_write, uniform, Elem, Group, Pass};
+use super::common::{Params, Tri, Vpl};
+use super::{dispatch, groups_1d, Gpu};
 use crate::math::{rng, triangle_barycentrics};
 use crate::scene::Frame;
 use glam::Vec2;
 use rand::Rng;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Point {
-    pub tri: u32,
-    pub b1: f32,
-    pub b2: f32,
-    pub pad: u32,
+gpu_struct! {
+    /// A point of the set: its triangle and barycentrics (b1, b2).
+    #[derive(Debug, PartialEq)]
+    pub struct Point {
+        pub tri: u32,
+        pub b1: f32,
+        pub b2: f32,
+        pub pad: u32,
+    }
 }
+
+gpu_struct! {
+    /// One pull-push level: its index, where it and its parent start in the pyramid, and
+    /// its tile side.
+    struct Level {
+        level: u32,
+        offset: u32,
+        parent_offset: u32,
+        size: u32,
+    }
+}
+
+pub(crate) const SPLAT: Pass = Pass {
+    name: "ism_splat",
+    wgsl: include_str!("../../shaders/ism_splat.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::COMPUTE,
+        bindings: &[
+            uniform("P", &Params::LAYOUT),
+            read("tris", Elem::Struct(&Tri::LAYOUT)),
+            read("points", Elem::Struct(&Point::LAYOUT)),
+            read("vpls", Elem::Struct(&Vpl::LAYOUT)),
+            read("slot_offset", Elem::Plain(4)),
+            read_write("atlas", Elem::Plain(4)),
+        ],
+    }],
+};
+
+pub(crate) const PULL_PUSH: Pass = Pass {
+    name: "ism_pullpush",
+    wgsl: include_str!("../../shaders/ism_pullpush.wgsl"),
+    groups: &[
+        Group {
+            stages: wgpu::ShaderStages::COMPUTE,
+            bindings: &[
+                uniform("P", &Params::LAYOUT),
+                read("atlas", Elem::Plain(4)),
+                read_write("pyramid", Elem::Plain(4)),
+            ],
+        },
+        Group {
+            stages: wgpu::ShaderStages::COMPUTE,
+            bindings: &[uniform("L", &Level::LAYOUT)],
+        },
+    ],
+};
 
 /// `count` points on `frame`'s surfaces in proportion to area, in random order.
 pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
@@ -51,15 +101,6 @@ pub fn slot_offset(seed: u64, slot: u32, num_points: u32) -> u32 {
     (crate::math::stream_seed(&[seed, slot as u64, 0x5107]) % num_points as u64) as u32
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Level {
-    level: u32,
-    offset: u32,
-    parent_offset: u32,
-    size: u32,
-}
-
 pub struct Ism {
     splat: wgpu::ComputePipeline,
     decode: wgpu::ComputePipeline,
@@ -78,7 +119,7 @@ pub struct Ism {
 
 /// Bytes of the atlas for `max_vpls` tiles of `size`^2.
 pub fn atlas_bytes(max_vpls: u32, size: u32) -> u64 {
-    max_vpls as u64 * size as u64 * size as u64 * 4
+    bytes::<u32>(max_vpls as u64 * size as u64 * size as u64)
 }
 
 impl Ism {
@@ -110,67 +151,46 @@ impl Ism {
         );
         let pyramid = gpu.buffer(
             "ism pyramid",
-            offsets_l[levels as usize + 1] * 4,
+            bytes::<f32>(offsets_l[levels as usize + 1]),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
-        let m_splat = gpu.shader("ism_splat", include_str!("../../shaders/ism_splat.wgsl"));
-        let l_splat = gpu.layout(
-            "ism_splat",
+        let m_splat = SPLAT.module(gpu);
+        let l_splat = SPLAT.layouts(gpu);
+        let splat = gpu.compute_pipeline(SPLAT.name, &m_splat, "main", &[&l_splat[0]]);
+        let splat_group = SPLAT.groups[0].bind(
+            gpu,
+            SPLAT.name,
+            &l_splat[0],
             &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, true),
-                storage_entry(4, true),
-                storage_entry(5, false),
+                ("P", params.as_entire_binding()),
+                ("tris", tris.as_entire_binding()),
+                ("points", points.as_entire_binding()),
+                ("vpls", vpls.as_entire_binding()),
+                ("slot_offset", offsets.as_entire_binding()),
+                ("atlas", atlas.as_entire_binding()),
             ],
         );
-        let splat = gpu.compute_pipeline("ism_splat", &m_splat, "main", &[&l_splat]);
-        let splat_group = gpu.bind(
-            "ism_splat",
-            &l_splat,
+        let m_pp = PULL_PUSH.module(gpu);
+        let l = PULL_PUSH.layouts(gpu);
+        let (l_pp, l_level) = (&l[0], &l[1]);
+        let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[l_pp, l_level]);
+        let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[l_pp, l_level]);
+        let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[l_pp, l_level]);
+        let pp_group = PULL_PUSH.groups[0].bind(
+            gpu,
+            PULL_PUSH.name,
+            l_pp,
             &[
-                params.as_entire_binding(),
-                tris.as_entire_binding(),
-                points.as_entire_binding(),
-                vpls.as_entire_binding(),
-                offsets.as_entire_binding(),
-                atlas.as_entire_binding(),
-            ],
-        );
-        let m_pp = gpu.shader(
-            "ism_pullpush",
-            include_str!("../../shaders/ism_pullpush.wgsl"),
-        );
-        let l_pp = gpu.layout(
-            "ism_pullpush",
-            &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, false),
-            ],
-        );
-        let l_level = gpu.layout(
-            "ism level",
-            &[uniform_entry(0, wgpu::ShaderStages::COMPUTE, false)],
-        );
-        let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[&l_pp, &l_level]);
-        let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[&l_pp, &l_level]);
-        let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[&l_pp, &l_level]);
-        let pp_group = gpu.bind(
-            "ism_pullpush",
-            &l_pp,
-            &[
-                params.as_entire_binding(),
-                atlas.as_entire_binding(),
-                pyramid.as_entire_binding(),
+                ("P", params.as_entire_binding()),
+                ("atlas", atlas.as_entire_binding()),
+                ("pyramid", pyramid.as_entire_binding()),
             ],
         );
         let level_groups = (0..=levels)
             .map(|l| {
                 let u = gpu.buffer(
                     "ism level",
-                    16,
+                    std::mem::size_of::<Level>() as u64,
                     wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 );
                 let lv = Level {
@@ -180,7 +200,7 @@ impl Ism {
                     size: size >> l,
                 };
                 gpu.queue.write_buffer(&u, 0, bytemuck::bytes_of(&lv));
-                gpu.bind("ism level", &l_level, &[u.as_entire_binding()])
+                PULL_PUSH.groups[1].bind(gpu, "ism level", l_level, &[("L", u.as_entire_binding())])
             })
             .collect();
         Ism {

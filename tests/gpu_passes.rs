@@ -1,0 +1,120 @@
+//! How a frame is submitted: one submission a frame gives the same image as one submission
+//! per pass, and per-pass times come back in every profiling mode, on every adapter here.
+
+use irad::frame::{Pipeline, SamplerKind, Settings};
+use irad::gpu::renderer::PASSES;
+use irad::gpu::{adapters, profile, BackendChoice, Profiling, RendererConfig};
+use irad::scene::builtin;
+use irad::vpl::sampler::SamplerParams;
+
+fn backends() -> Vec<BackendChoice> {
+    let found: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
+        .into_iter()
+        .filter(|&b| adapters(b).iter().any(|(_, ok)| *ok))
+        .collect();
+    assert!(!found.is_empty(), "no usable Vulkan or GL adapter");
+    found
+}
+
+fn pipeline(scene: &str, vpls: u32, backend: BackendChoice) -> Pipeline {
+    let (w, h) = (48, 40);
+    let cfg = RendererConfig {
+        width: w,
+        height: h,
+        max_vpls: vpls,
+        ism_size: 32,
+        points_per_vpl: 2048,
+        num_points: 1 << 15,
+        pull_levels: 3,
+        ism_bias: 1.5,
+        light_samples: 8,
+        shadow_size: 128,
+        shadow_bias: 1.5,
+        exposure: 1.0,
+        seed: 3,
+    };
+    let settings = Settings {
+        sampler: SamplerParams {
+            kind: SamplerKind::Mh,
+            slots: vpls as usize,
+            candidates: vpls as usize * 4,
+            camera_points: 64,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_escape: 0,
+            dmin: 0.07,
+            seed: 3,
+            width: w,
+            height: h,
+        },
+        fps: 24.0,
+    };
+    let scene = builtin::load(scene).unwrap().unwrap();
+    Pipeline::new(scene, settings, cfg, backend).unwrap()
+}
+
+/// Frame 2 rendered with a pipeline whose renderer uses `mode`.
+fn render(backend: BackendChoice, mode: Profiling) -> irad::frame::FrameOutput {
+    let mut p = pipeline("cornell-orbit", 64, backend);
+    p.renderer.profiling = mode;
+    for f in 0..2 {
+        p.render_frame(f, false).unwrap();
+    }
+    p.render_frame(2, true).unwrap()
+}
+
+#[test]
+fn one_submission_gives_the_serialized_frame_and_per_pass_times() {
+    for backend in backends() {
+        let serial = render(backend, Profiling::Serialized);
+        println!("{backend:?} Serialized: {:?}", serial.image.timings);
+        let mut modes = vec![Profiling::Off];
+        let gpu = irad::gpu::Gpu::new(backend).unwrap();
+        let stamps = profile::has_timestamps(&gpu);
+        println!("{backend:?}: timestamp queries {stamps}");
+        if stamps {
+            modes.push(Profiling::Timestamps);
+        }
+        for mode in modes {
+            let one = render(backend, mode);
+            assert_eq!(one.image.profiling, mode);
+            // The same commands in the same order: the same bits.
+            assert!(
+                one.image.hdr == serial.image.hdr
+                    && one.image.ldr == serial.image.ldr
+                    && one.image.direct == serial.image.direct
+                    && one.image.indirect == serial.image.indirect,
+                "{backend:?}: {mode:?} differs from the serialized frame"
+            );
+            let names: Vec<&str> = one.image.timings.iter().map(|t| t.0).collect();
+            println!("{backend:?} {mode:?}: {:?}", one.image.timings);
+            let passes: Vec<&str> = if mode == Profiling::Off {
+                vec![]
+            } else {
+                PASSES.to_vec()
+            };
+            let want: Vec<&str> = [vec!["upload"], passes, vec!["readback"]].concat();
+            assert_eq!(names, want, "{backend:?} {mode:?}");
+            // Every time is finite, and the passes' GPU times fit in the frame's wall time.
+            let sum: f64 = one.image.timings.iter().map(|t| t.1).sum();
+            assert!(one
+                .image
+                .timings
+                .iter()
+                .all(|t| t.1.is_finite() && t.1 >= 0.0));
+            assert!(
+                sum <= one.seconds,
+                "{backend:?} {mode:?}: {sum} > {}",
+                one.seconds
+            );
+            if mode == Profiling::Timestamps {
+                // The gather and the ISM splat do real work at 64 VPLs: a timestamp pair
+                // that measured nothing would show 0.
+                let t = |n: &str| one.image.timings.iter().find(|t| t.0 == n).unwrap().1;
+                assert!(t("gather") > 0.0 && t("ism_splat") > 0.0 && t("shadow_maps") > 0.0);
+            }
+        }
+        let serial_names: Vec<&str> = serial.image.timings.iter().map(|t| t.0).collect();
+        assert_eq!(serial_names.len(), PASSES.len() + 2);
+    }
+}
