@@ -118,3 +118,69 @@ fn one_submission_gives_the_serialized_frame_and_per_pass_times() {
         assert_eq!(serial_names.len(), PASSES.len() + 2);
     }
 }
+
+/// Frames 0..5 of `scene` with and without reuse across frames.
+fn reuse_run(scene: &str, backend: BackendChoice) -> Vec<irad::gpu::renderer::Reuse> {
+    let mut keep = pipeline(scene, 64, backend);
+    let mut redraw = pipeline(scene, 64, backend);
+    redraw.renderer.reuse = false;
+    (0..5)
+        .map(|f| {
+            let (a, b) = (
+                keep.render_frame(f, true).unwrap(),
+                redraw.render_frame(f, true).unwrap(),
+            );
+            // A kept tile or hemicube is the one a redraw would give: the same bits.
+            let d = |x: &Option<irad::image::Hdr>, y: &Option<irad::image::Hdr>| {
+                let (x, y) = (x.as_ref().unwrap(), y.as_ref().unwrap());
+                x.data
+                    .iter()
+                    .zip(&y.data)
+                    .map(|(p, q)| (*p - *q).abs().max_element())
+                    .fold(0.0f32, f32::max)
+            };
+            println!(
+                "max diff direct {} indirect {}",
+                d(&a.image.direct, &b.image.direct),
+                d(&a.image.indirect, &b.image.indirect)
+            );
+            assert!(
+                a.image.hdr == b.image.hdr
+                    && a.image.direct == b.image.direct
+                    && a.image.indirect == b.image.indirect,
+                "{backend:?} {scene} frame {f}: reuse changed the image"
+            );
+            let r = b.image.reused;
+            assert!(!r.shadow_maps_kept && r.ism_tiles_kept == 0 && !r.geometry_kept);
+            println!("{backend:?} {scene} frame {f}: {:?}", a.image.reused);
+            a.image.reused
+        })
+        .collect()
+}
+
+#[test]
+fn reuse_keeps_what_did_not_move_and_gives_the_same_frames() {
+    for backend in backends() {
+        // The camera orbits a still box: hemicubes kept after frame 0; MH keeps most VPLs
+        // and so most ISM tiles.
+        let r = reuse_run("cornell-orbit", backend);
+        assert_eq!(r[0].ism_tiles_drawn, 64);
+        assert!(!r[0].shadow_maps_kept && !r[0].geometry_kept);
+        for x in &r[1..] {
+            assert!(
+                x.geometry_kept && x.lights_kept && x.shadow_maps_kept,
+                "{x:?}"
+            );
+            assert_eq!(x.ism_tiles_kept + x.ism_tiles_drawn, 64);
+        }
+        let kept: u32 = r[1..].iter().map(|x| x.ism_tiles_kept).sum();
+        assert!(kept > 0, "no ISM tile kept under MH: {r:?}");
+        // A moving box: nothing is kept.
+        for x in reuse_run("cornell-box", backend).iter().skip(1) {
+            assert!(
+                !x.geometry_kept && !x.shadow_maps_kept && x.ism_tiles_kept == 0,
+                "{x:?}"
+            );
+        }
+    }
+}

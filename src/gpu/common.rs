@@ -22,7 +22,8 @@ gpu_struct! {
         pub shadow_bias: f32,
         pub near: f32,
         pub pull_levels: u32,
-        pub pad: u32,
+        /// ISM slots redrawn this frame (the first entries of the slots buffer).
+        pub num_changed: u32,
     }
 }
 

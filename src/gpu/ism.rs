@@ -3,7 +3,8 @@
 //! The point set: points on the surfaces in proportion to area, kept as (triangle,
 //! barycentrics) so they follow moving geometry, in random order. VPL slot s splats the
 //! `points_per_vpl` points starting at its own random offset, so each slot has its own random
-//! subset, and a slot that keeps its VPL keeps its subset. Each splat writes the nearest depth
+//! subset, and a slot that keeps its VPL keeps its subset (and its tile, while the geometry is
+//! still: only the slots the renderer lists are redrawn). Each splat writes the nearest depth
 //! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
 //! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
 
@@ -47,7 +48,7 @@ pub(crate) const SPLAT: Pass = Pass {
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             read("points", Elem::Struct(&Point::LAYOUT)),
             read("vpls", Elem::Struct(&Vpl::LAYOUT)),
-            read("slot_offset", Elem::Plain(4)),
+            read("slots", Elem::Plain(8)),
             read_write("atlas", Elem::Plain(4)),
         ],
     }],
@@ -63,6 +64,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
                 uniform("P", &Params::LAYOUT),
                 read("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
+                read("slots", Elem::Plain(8)),
             ],
         },
         Group {
@@ -102,6 +104,7 @@ pub fn slot_offset(seed: u64, slot: u32, num_points: u32) -> u32 {
 }
 
 pub struct Ism {
+    clear: wgpu::ComputePipeline,
     splat: wgpu::ComputePipeline,
     decode: wgpu::ComputePipeline,
     pull: wgpu::ComputePipeline,
@@ -109,7 +112,6 @@ pub struct Ism {
     splat_group: wgpu::BindGroup,
     pp_group: wgpu::BindGroup,
     level_groups: Vec<wgpu::BindGroup>,
-    atlas: wgpu::Buffer,
     /// Level 0 of the pyramid is the filled atlas the gather reads.
     pub pyramid: wgpu::Buffer,
     size: u32,
@@ -130,7 +132,7 @@ impl Ism {
         tris: &wgpu::Buffer,
         points: &wgpu::Buffer,
         vpls: &wgpu::Buffer,
-        offsets: &wgpu::Buffer,
+        slots: &wgpu::Buffer,
         max_vpls: u32,
         size: u32,
         levels: u32,
@@ -157,6 +159,7 @@ impl Ism {
         let m_splat = SPLAT.module(gpu);
         let l_splat = SPLAT.layouts(gpu);
         let splat = gpu.compute_pipeline(SPLAT.name, &m_splat, "main", &[&l_splat[0]]);
+        let clear = gpu.compute_pipeline("ism clear", &m_splat, "clear", &[&l_splat[0]]);
         let splat_group = SPLAT.groups[0].bind(
             gpu,
             SPLAT.name,
@@ -166,7 +169,7 @@ impl Ism {
                 ("tris", tris.as_entire_binding()),
                 ("points", points.as_entire_binding()),
                 ("vpls", vpls.as_entire_binding()),
-                ("slot_offset", offsets.as_entire_binding()),
+                ("slots", slots.as_entire_binding()),
                 ("atlas", atlas.as_entire_binding()),
             ],
         );
@@ -184,6 +187,7 @@ impl Ism {
                 ("P", params.as_entire_binding()),
                 ("atlas", atlas.as_entire_binding()),
                 ("pyramid", pyramid.as_entire_binding()),
+                ("slots", slots.as_entire_binding()),
             ],
         );
         let level_groups = (0..=levels)
@@ -204,6 +208,7 @@ impl Ism {
             })
             .collect();
         Ism {
+            clear,
             splat,
             decode,
             pull,
@@ -211,7 +216,6 @@ impl Ism {
             splat_group,
             pp_group,
             level_groups,
-            atlas,
             pyramid,
             size,
             levels,
@@ -219,24 +223,37 @@ impl Ism {
         }
     }
 
-    /// Clears the atlas and splats every slot's points.
-    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32, points_per_vpl: u32) {
-        debug_assert!(num_vpls <= self.max_vpls);
-        enc.clear_buffer(&self.atlas, 0, None);
-        if num_vpls > 0 {
-            dispatch(
-                enc,
-                "ism splat",
-                &self.splat,
-                &[&self.splat_group],
-                (points_per_vpl.div_ceil(64), num_vpls, 1),
-            );
+    /// Empties the tiles of the first `changed` entries of the slots buffer and splats their
+    /// points; the other tiles are kept.
+    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, changed: u32, points_per_vpl: u32) {
+        debug_assert!(changed <= self.max_vpls);
+        if changed == 0 {
+            return;
         }
+        let (x, y) = groups_1d(changed as u64 * (self.size as u64).pow(2));
+        dispatch(
+            enc,
+            "ism clear",
+            &self.clear,
+            &[&self.splat_group],
+            (x, y, 1),
+        );
+        dispatch(
+            enc,
+            "ism splat",
+            &self.splat,
+            &[&self.splat_group],
+            (points_per_vpl.div_ceil(64), changed, 1),
+        );
     }
 
-    /// Decodes the atlas into the pyramid and fills holes by pull-push.
-    pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32) {
-        let texels = |l: u32| num_vpls as u64 * ((self.size >> l) as u64).pow(2);
+    /// Decodes the redrawn tiles of the atlas into the pyramid and fills their holes by
+    /// pull-push.
+    pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, changed: u32) {
+        if changed == 0 {
+            return;
+        }
+        let texels = |l: u32| changed as u64 * ((self.size >> l) as u64).pow(2);
         let g = |n: u64| {
             let (x, y) = groups_1d(n);
             (x, y, 1)

@@ -68,6 +68,8 @@ pub struct RenderedFrame {
     pub timings: Vec<(&'static str, f64)>,
     /// How the passes were timed.
     pub profiling: Profiling,
+    /// What was kept from the previous frame.
+    pub reused: Reuse,
 }
 
 /// The passes of a frame, in order, as timings name them.
@@ -80,6 +82,36 @@ pub const PASSES: [&str; 7] = [
     "gather",
     "compose",
 ];
+
+/// What a frame reused from the previous one (for run records).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Reuse {
+    /// The triangles are the same bits as last frame's: not uploaded.
+    pub geometry_kept: bool,
+    /// The emitter samples are the same: not uploaded.
+    pub lights_kept: bool,
+    /// Whether the VPLs were uploaded (any bit of any VPL changed).
+    pub vpls_uploaded: bool,
+    /// The shadow hemicubes were kept (same samples, same geometry).
+    pub shadow_maps_kept: bool,
+    /// VPL slots whose ISM tile was kept (same VPL position and normal, same geometry).
+    pub ism_tiles_kept: u32,
+    /// VPL slots whose ISM tile was splatted and pulled/pushed again.
+    pub ism_tiles_drawn: u32,
+}
+
+/// What the last frame uploaded, to tell what changed.
+#[derive(Default)]
+struct Last {
+    tris: Vec<Tri>,
+    vpls: Vec<Vpl>,
+    lights: Vec<LightSample>,
+}
+
+/// Whether two slices hold the same bits.
+fn same<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
+    bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
+}
 
 /// Buffers the frame's outputs are copied into for reading back.
 struct Staging {
@@ -97,6 +129,14 @@ pub struct Renderer {
     pub profiling: Profiling,
     timestamps: Option<Timestamps>,
     staging: Staging,
+    /// Keep what did not change since the last frame (shadow maps, ISM tiles, uploads);
+    /// `false` redraws and uploads everything every frame.
+    pub reuse: bool,
+    last: Last,
+    /// Each slot's offset into the ISM point set.
+    offsets: Vec<u32>,
+    /// (slot, offset) of the slots whose ISM tiles are redrawn this frame.
+    slots: wgpu::Buffer,
     tri_count: usize,
     params: wgpu::Buffer,
     tris: wgpu::Buffer,
@@ -203,13 +243,11 @@ impl Renderer {
         let offsets: Vec<u32> = (0..c.max_vpls)
             .map(|s| ism::slot_offset(c.seed, s, c.num_points))
             .collect();
-        let offsets_buf = gpu.buffer(
-            "ism slot offsets",
-            bytes::<u32>(offsets.len() as u64),
+        let slots = gpu.buffer(
+            "ism slots to redraw",
+            bytes::<[u32; 2]>(c.max_vpls as u64),
             storage,
         );
-        gpu.queue
-            .write_buffer(&offsets_buf, 0, bytemuck::cast_slice(&offsets));
         let pixels = c.width as u64 * c.height as u64;
         let gbuffer = GBuffer::new(&gpu, c.width, c.height);
         let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples);
@@ -228,7 +266,7 @@ impl Renderer {
             &tris,
             &points_buf,
             &vpls,
-            &offsets_buf,
+            &slots,
             c.max_vpls,
             c.ism_size,
             c.pull_levels,
@@ -266,6 +304,10 @@ impl Renderer {
             profiling,
             timestamps,
             staging,
+            reuse: true,
+            last: Last::default(),
+            offsets,
+            slots,
             tri_count,
             params,
             tris,
@@ -281,9 +323,11 @@ impl Renderer {
         })
     }
 
-    fn upload(&self, input: &GpuFrame, far: f32, near: f32) -> Result<()> {
+    /// Uploads what changed since the last frame; returns the slots whose ISM must be
+    /// redrawn and what was reused.
+    fn upload(&mut self, input: &GpuFrame, far: f32, near: f32) -> Result<(Vec<u32>, Reuse)> {
         let f = input.frame;
-        let c = &self.config;
+        let c = self.config.clone();
         if f.tris.len() != self.tri_count {
             bail!(
                 "the frame has {} triangles but the renderer was built for {}",
@@ -300,6 +344,79 @@ impl Renderer {
                 c.light_samples
             );
         }
+        let q = &self.gpu.queue;
+        let tris: Vec<Tri> = (0..f.tris.len())
+            .map(|i| Tri {
+                v0: f.tris[i][0].extend(1.0).to_array(),
+                v1: f.tris[i][1].extend(1.0).to_array(),
+                v2: f.tris[i][2].extend(1.0).to_array(),
+                n: f.normals[i].extend(0.0).to_array(),
+                albedo: f.albedo(i).extend(0.0).to_array(),
+                emission: f.emission(i).extend(0.0).to_array(),
+            })
+            .collect();
+        let still = self.reuse && same(&self.last.tris, &tris);
+        if !still {
+            q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
+            let verts: Vec<Vertex> = f
+                .tris
+                .iter()
+                .enumerate()
+                .flat_map(|(i, t)| {
+                    t.map(|p| Vertex {
+                        pos: p.to_array(),
+                        tri: i as u32,
+                    })
+                })
+                .collect();
+            q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
+            self.last.tris = tris;
+        }
+        let v4 = |v: Vec3| v.extend(0.0).to_array();
+        let vpls: Vec<Vpl> = input
+            .vpls
+            .iter()
+            .map(|v| Vpl {
+                pos: v4(v.position),
+                normal: v4(v.normal),
+                flux: v4(v.flux),
+            })
+            .collect();
+        // A slot keeps its ISM tile while the geometry is still and its VPL's position and
+        // normal are the same bits as last frame's.
+        let changed: Vec<u32> = (0..vpls.len())
+            .filter(|&s| {
+                let old = self.last.vpls.get(s);
+                !(still && old.is_some_and(|o| o.pos == vpls[s].pos && o.normal == vpls[s].normal))
+            })
+            .map(|s| s as u32)
+            .collect();
+        let vpls_uploaded = !(still && same(&self.last.vpls, &vpls));
+        if vpls_uploaded && !vpls.is_empty() {
+            q.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&vpls));
+        }
+        self.last.vpls = vpls;
+        if !changed.is_empty() {
+            let pairs: Vec<[u32; 2]> = changed
+                .iter()
+                .map(|&s| [s, self.offsets[s as usize]])
+                .collect();
+            q.write_buffer(&self.slots, 0, bytemuck::cast_slice(&pairs));
+        }
+        let lights: Vec<LightSample> = input
+            .lights
+            .iter()
+            .map(|l| LightSample {
+                pos: v4(l.position),
+                normal: v4(l.normal),
+                radiance: v4(l.radiance),
+            })
+            .collect();
+        let lights_same = self.reuse && same(&self.last.lights, &lights);
+        if !lights.is_empty() && !lights_same {
+            q.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
+        }
+        self.last.lights = lights;
         let params = Params {
             width: c.width,
             height: c.height,
@@ -317,59 +434,20 @@ impl Renderer {
             shadow_bias: c.shadow_bias,
             near,
             pull_levels: c.pull_levels,
-            pad: 0,
+            num_changed: changed.len() as u32,
         };
-        let q = &self.gpu.queue;
-        q.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let tris: Vec<Tri> = (0..f.tris.len())
-            .map(|i| Tri {
-                v0: f.tris[i][0].extend(1.0).to_array(),
-                v1: f.tris[i][1].extend(1.0).to_array(),
-                v2: f.tris[i][2].extend(1.0).to_array(),
-                n: f.normals[i].extend(0.0).to_array(),
-                albedo: f.albedo(i).extend(0.0).to_array(),
-                emission: f.emission(i).extend(0.0).to_array(),
-            })
-            .collect();
-        q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
-        let verts: Vec<Vertex> = f
-            .tris
-            .iter()
-            .enumerate()
-            .flat_map(|(i, t)| {
-                t.map(|p| Vertex {
-                    pos: p.to_array(),
-                    tri: i as u32,
-                })
-            })
-            .collect();
-        q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
-        let v4 = |v: Vec3| v.extend(0.0).to_array();
-        let vpls: Vec<Vpl> = input
-            .vpls
-            .iter()
-            .map(|v| Vpl {
-                pos: v4(v.position),
-                normal: v4(v.normal),
-                flux: v4(v.flux),
-            })
-            .collect();
-        if !vpls.is_empty() {
-            q.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&vpls));
-        }
-        let lights: Vec<LightSample> = input
-            .lights
-            .iter()
-            .map(|l| LightSample {
-                pos: v4(l.position),
-                normal: v4(l.normal),
-                radiance: v4(l.radiance),
-            })
-            .collect();
-        if !lights.is_empty() {
-            q.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
-        }
-        Ok(())
+        self.gpu
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let reuse = Reuse {
+            geometry_kept: still,
+            lights_kept: lights_same,
+            vpls_uploaded,
+            shadow_maps_kept: false,
+            ism_tiles_kept: input.vpls.len() as u32 - changed.len() as u32,
+            ism_tiles_drawn: changed.len() as u32,
+        };
+        Ok((changed, reuse))
     }
 
     /// Renders one frame. With `components`, the direct and indirect images come back too.
@@ -377,20 +455,23 @@ impl Renderer {
         let f = input.frame;
         let c = self.config.clone();
         let (lo, hi) = f.bounds();
-        let far = (hi - lo)
-            .length()
-            .max((f.camera.position - (lo + hi) * 0.5).length() * 2.0)
-            * 1.5;
+        // The depth range of the ISMs and hemicubes from the scene alone (every VPL and
+        // emitter sample lies in its bounds), so that kept tiles stay valid while the camera
+        // moves; the camera's covers the scene from wherever the camera is.
+        let far = (hi - lo).length() * 1.5;
         let near = far * 1e-5;
+        let cam_far = far.max((f.camera.position - (lo + hi) * 0.5).length() * 3.0);
         let t_upload = Instant::now();
-        self.upload(input, far, near)?;
+        let (changed, mut reuse) = self.upload(input, far, near)?;
         let upload_s = t_upload.elapsed().as_secs_f64();
         let count = (self.tri_count * 3) as u32;
         let t_gpu = Instant::now();
         let mut rec = Recorder::new(&self.gpu, self.profiling, self.timestamps.as_ref());
 
-        let view_proj =
-            f.camera.projection(c.width, c.height, near.max(1e-3), far) * f.camera.view();
+        let view_proj = f
+            .camera
+            .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
+            * f.camera.view();
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
         rec.end_pass()?;
@@ -400,27 +481,26 @@ impl Renderer {
             .iter()
             .map(|l| (l.position, l.normal))
             .collect();
-        self.shadows.encode(
+        let drawn = self.shadows.encode(
             &self.gpu,
             &mut rec.enc,
             &samples,
-            near,
-            far,
+            (near, far),
             &self.vertices,
             count,
+            !reuse.geometry_kept,
         );
+        reuse.shadow_maps_kept = !drawn && !samples.is_empty();
         rec.end_pass()?;
 
         self.direct.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
 
-        let n = input.vpls.len() as u32;
+        let n = changed.len() as u32;
         self.ism.encode_splat(&mut rec.enc, n, c.points_per_vpl);
         rec.end_pass()?;
 
-        if n > 0 {
-            self.ism.encode_pull_push(&mut rec.enc, n);
-        }
+        self.ism.encode_pull_push(&mut rec.enc, n);
         rec.end_pass()?;
 
         self.gather.encode(&mut rec.enc, c.width, c.height);
@@ -489,6 +569,7 @@ impl Renderer {
             indirect,
             timings,
             profiling: self.profiling,
+            reused: reuse,
         })
     }
 }

@@ -48,6 +48,8 @@ pub struct ShadowMaps {
     pub size: u32,
     /// Bytes from one face's uniform to the next (the adapter's offset alignment).
     stride: u64,
+    /// The faces last drawn.
+    last: Option<Vec<u8>>,
 }
 
 impl ShadowMaps {
@@ -103,21 +105,24 @@ impl ShadowMaps {
             depth,
             size,
             stride,
+            last: None,
         }
     }
 
-    /// Renders the hemicubes of `samples` (position, normal).
+    /// Renders the hemicubes of `samples` (position, normal) with depth range `(near, far)`,
+    /// unless they are the ones last drawn and the geometry did not move. Returns whether it
+    /// drew.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
-        &self,
+        &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         samples: &[(Vec3, Vec3)],
-        near: f32,
-        far: f32,
+        (near, far): (f32, f32),
         vertices: &wgpu::Buffer,
         count: u32,
-    ) {
+        geometry_moved: bool,
+    ) -> bool {
         let mut bytes = vec![0u8; (self.stride as usize) * samples.len() * 5];
         for (j, &(p, n)) in samples.iter().enumerate() {
             for (k, (r, u, f)) in face_bases(n).into_iter().enumerate() {
@@ -136,8 +141,8 @@ impl ShadowMaps {
                     .copy_from_slice(bytemuck::bytes_of(&face));
             }
         }
-        if bytes.is_empty() {
-            return;
+        if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
+            return false;
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
         for l in 0..samples.len() * 5 {
@@ -153,5 +158,7 @@ impl ShadowMaps {
                 count,
             );
         }
+        self.last = Some(bytes);
+        true
     }
 }
