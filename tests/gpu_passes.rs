@@ -1,11 +1,11 @@
 //! How a frame is submitted: one submission a frame gives the same image as one submission
 //! per pass, and per-pass times come back in every profiling mode, on every adapter here.
 
-use irad::frame::{Pipeline, SamplerKind, Settings};
+use irad::config;
+use irad::frame::{Pipeline, SamplerKind};
 use irad::gpu::renderer::PASSES;
-use irad::gpu::{adapters, profile, BackendChoice, Profiling, RendererConfig};
+use irad::gpu::{adapters, profile, BackendChoice, Profiling};
 use irad::scene::builtin;
-use irad::vpl::sampler::SamplerParams;
 
 fn backends() -> Vec<BackendChoice> {
     let found: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
@@ -16,41 +16,27 @@ fn backends() -> Vec<BackendChoice> {
     found
 }
 
+/// A small MH pipeline for a built-in scene, on its own device.
 fn pipeline(scene: &str, vpls: u32, backend: BackendChoice) -> Pipeline {
-    let (w, h) = (48, 40);
-    let cfg = RendererConfig {
-        width: w,
-        height: h,
-        max_vpls: vpls,
-        ism_size: 32,
-        points_per_vpl: 2048,
-        num_points: 1 << 15,
-        pull_levels: 3,
-        ism_bias: 1.5,
-        light_samples: 8,
-        shadow_size: 128,
-        shadow_bias: 1.5,
-        exposure: 1.0,
-        seed: 3,
+    let mut c = config::Render::default();
+    c.sequence.size = config::Size {
+        width: 48,
+        height: 40,
     };
-    let settings = Settings {
-        sampler: SamplerParams {
-            kind: SamplerKind::Mh,
-            slots: vpls as usize,
-            candidates: vpls as usize * 4,
-            camera_points: 64,
-            eps: 0.05,
-            mh_rate: 1.0,
-            mh_escape: 0,
-            dmin: 0.07,
-            seed: 3,
-            width: w,
-            height: h,
-        },
-        fps: 24.0,
-    };
+    c.sequence.seed = 3;
+    c.vpls = vpls;
+    c.clamp = Some(0.07);
+    c.backend = backend;
+    c.sampler.kind = SamplerKind::Mh;
+    c.sampler.camera_points = 64;
+    c.sampler.mh_escape = 0;
+    c.quality.ism_size = 32;
+    c.quality.ism_points = 2048;
+    c.quality.light_samples = 8;
+    c.quality.shadow_size = 128;
     let scene = builtin::load(scene).unwrap().unwrap();
-    Pipeline::new(scene, settings, cfg, backend).unwrap()
+    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
+    Pipeline::new(gpu, scene, &c).unwrap()
 }
 
 /// Frame 2 rendered with a pipeline whose renderer uses `mode`.
