@@ -389,6 +389,38 @@ pub struct Render {
     /// Also write each frame's direct and indirect light (frame_FFFF_direct.exr/.png, _indirect)
     #[arg(long)]
     pub components: bool,
+    /// How the GPU passes are submitted and timed: auto (timestamp queries where they time
+    /// the passes, else serialized), timestamps, serialized (a wait after each pass), off (one
+    /// submission, no per-pass times)
+    #[arg(long, value_enum, default_value_t = Render::default().profiling)]
+    pub profiling: ProfilingChoice,
+    /// Redraw everything every frame: no reuse of shadow maps, ISM tiles and uploads (for
+    /// measuring what reuse saves; the frames are the same bits)
+    #[arg(long)]
+    pub no_reuse: bool,
+}
+
+/// `--profiling`: how a frame's GPU passes are submitted and timed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProfilingChoice {
+    Auto,
+    Timestamps,
+    Serialized,
+    Off,
+}
+
+impl ProfilingChoice {
+    /// The mode on `gpu` (auto: [`crate::gpu::Profiling::default_for`]).
+    pub fn on(self, gpu: &crate::gpu::Gpu) -> crate::gpu::Profiling {
+        use crate::gpu::Profiling;
+        match self {
+            ProfilingChoice::Auto => Profiling::default_for(gpu),
+            ProfilingChoice::Timestamps => Profiling::Timestamps,
+            ProfilingChoice::Serialized => Profiling::Serialized,
+            ProfilingChoice::Off => Profiling::Off,
+        }
+    }
 }
 
 /// The scene `irad render` and `irad compare` use when none is named.
@@ -406,6 +438,8 @@ impl Default for Render {
             out: PathBuf::from("out"),
             exposure: 1.0,
             components: false,
+            profiling: ProfilingChoice::Auto,
+            no_reuse: false,
         }
     }
 }
@@ -625,6 +659,8 @@ impl Compare {
             out: self.out.clone(),
             exposure: r.exposure,
             components: false,
+            profiling: ProfilingChoice::Auto,
+            no_reuse: false,
         }
     }
 

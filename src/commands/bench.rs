@@ -28,6 +28,7 @@ pub fn bench(cfg: &config::Bench) -> Result<()> {
     let adapter = gpu.adapter.clone();
     report::prepare_out_dir(&cfg.render.out)?;
     let mut rows = Vec::new();
+    let mut profiling = None;
     let pb = report::progress(cfg.cases.len() as u64 * (cfg.repeat as u64 + 1), "bench");
     for &c in &cfg.cases {
         let mut p = Pipeline::new(gpu.clone(), scene.clone(), &cfg.case(c))?;
@@ -35,7 +36,9 @@ pub fn bench(cfg: &config::Bench) -> Result<()> {
         pb.inc(1);
         let mut means = StageMeans::default();
         for f in 0..cfg.repeat {
-            means.add(&FrameRecord::of(&p.render_frame(f, false)?));
+            let record = FrameRecord::of(&p.render_frame(f, false)?);
+            means.add(&record);
+            profiling = Some(record.profiling);
             pb.inc(1);
         }
         let (seconds_per_frame, stages) = means.means();
@@ -52,6 +55,14 @@ pub fn bench(cfg: &config::Bench) -> Result<()> {
         rayon::current_num_threads(),
         cfg.repeat
     );
+    let how = match profiling {
+        Some(crate::gpu::Profiling::Timestamps) => "GPU timestamp queries, one submission a frame",
+        Some(crate::gpu::Profiling::Serialized) => {
+            "CPU wall time, a submission and a wait per pass"
+        }
+        _ => "not timed (--profiling off): one submission a frame",
+    };
+    println!("pass times: {how}");
     print!("{:16}", "stage (ms)");
     for r in &rows {
         print!("{:>20}", format!("{} VPLs {}", r.case.vpls, r.case.size));

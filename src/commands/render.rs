@@ -16,7 +16,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 /// One frame's record (a line of `frames.jsonl`, and an entry of `run.json`'s `frames`).
-#[derive(Serialize, serde::Deserialize)]
+#[derive(Serialize)]
 pub struct FrameRecord {
     pub frame: u32,
     pub time: f32,
@@ -34,6 +34,10 @@ pub struct FrameRecord {
     pub mean_rgb: [f32; 3],
     /// Resident memory of the process after the frame, in MiB (Linux).
     pub rss_mib: Option<f64>,
+    /// What the GPU kept from the previous frame (uploads, shadow maps, ISM tiles).
+    pub reused: crate::gpu::renderer::Reuse,
+    /// How the GPU passes were timed (timestamps, serialized, off).
+    pub profiling: crate::gpu::Profiling,
 }
 
 impl FrameRecord {
@@ -52,6 +56,8 @@ impl FrameRecord {
             importance_seconds: fo.selection.importance_s,
             mean_rgb: fo.image.hdr.mean().to_array(),
             rss_mib: report::resident_bytes().map(|b| b as f64 / (1 << 20) as f64),
+            reused: fo.image.reused,
+            profiling: fo.image.profiling,
         }
     }
 }
