@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
         let img = reference::render(
             &f,
             &tr,
-            &reference::Settings {
+            &reference::Params {
                 width: size,
                 height: size,
                 spp,

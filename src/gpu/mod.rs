@@ -2,11 +2,14 @@
 //! `shaders/`: `gbuffer`, `ism` (splat and pull-push), `gather`, `shadow` and `direct`,
 //! `compose` (emission, sum, exposure and sRGB). `renderer` runs them in order for a frame.
 
+pub(crate) mod bindings;
+mod common;
 pub mod compose;
 pub mod direct;
 pub mod gather;
 pub mod gbuffer;
 pub mod ism;
+pub mod profile;
 pub mod radiosity;
 pub mod renderer;
 pub mod shadow;
@@ -14,7 +17,8 @@ pub mod shadow;
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
-pub use renderer::{GpuFrame, RenderedFrame, Renderer, RendererConfig};
+pub use profile::Profiling;
+pub use renderer::{GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.
 pub const COMMON_WGSL: &str = include_str!("../../shaders/common.wgsl");
@@ -126,9 +130,48 @@ fn usable(a: &wgpu::Adapter) -> bool {
         && a.limits().max_compute_workgroup_size_x >= 64
 }
 
+thread_local! {
+    static DEVICES_OPENED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many devices this thread has opened with [`Gpu::new`] (a command opens one and lends
+/// it to every pipeline; tests count with this).
+pub fn devices_opened() -> u64 {
+    DEVICES_OPENED.with(|c| c.get())
+}
+
+/// Mesa's EGL and Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on machines
+/// without a desktop session, which reads like an error of irad's. Where the variable is unset
+/// or not a folder, point it at a private folder under the temporary directory. Call it at
+/// the start of `main`, before any thread starts (it sets an environment variable).
+pub fn quiet_mesa_runtime_dir() {
+    let ok = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(|d| std::path::Path::new(&d).is_dir())
+        .unwrap_or(false);
+    if ok {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("irad-runtime-{}", std::process::id()));
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::DirBuilderExt;
+        let _ = std::fs::DirBuilder::new()
+            .recursive(true)
+            .mode(0o700)
+            .create(&dir);
+    }
+    #[cfg(not(unix))]
+    let _ = std::fs::create_dir_all(&dir);
+    if dir.is_dir() {
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
 impl Gpu {
-    /// Opens the preferred usable adapter for `choice`.
+    /// Opens the preferred usable adapter for `choice`. A process opens one and shares it
+    /// (`Arc<Gpu>`) with every pipeline.
     pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        DEVICES_OPENED.with(|c| c.set(c.get() + 1));
         let inst = instance(choice.backends());
         let mut list = pollster::block_on(inst.enumerate_adapters(choice.backends()));
         list.sort_by_key(|a| rank(&a.get_info()));
@@ -153,6 +196,7 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("irad"),
             required_limits: limits.clone(),
+            required_features: adapter.features() & profile::TIMESTAMP_FEATURES,
             ..Default::default()
         }))
         .map_err(|e| anyhow!("cannot open a device on {}: {e}", adapter.get_info().name))?;
@@ -231,95 +275,13 @@ pub fn check_size(limits: &wgpu::Limits, what: &str, bytes: u64, hint: &str) -> 
     Ok(())
 }
 
-/// Layout entry of a storage buffer visible to compute shaders.
-pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// Layout entry of a uniform buffer.
-pub(crate) fn uniform_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    dynamic: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// Layout entry of an unsigned-integer texture read with textureLoad in compute.
-pub(crate) fn texture_entry(
-    binding: u32,
-    dim: wgpu::TextureViewDimension,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Uint,
-            view_dimension: dim,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
 impl Gpu {
-    pub(crate) fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    pub fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: size.max(16).next_multiple_of(16),
             usage,
             mapped_at_creation: false,
-        })
-    }
-
-    pub(crate) fn layout(
-        &self,
-        label: &str,
-        entries: &[wgpu::BindGroupLayoutEntry],
-    ) -> wgpu::BindGroupLayout {
-        self.device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-    }
-
-    pub(crate) fn bind(
-        &self,
-        label: &str,
-        layout: &wgpu::BindGroupLayout,
-        resources: &[wgpu::BindingResource],
-    ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = resources
-            .iter()
-            .enumerate()
-            .map(|(i, r)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: r.clone(),
-            })
-            .collect();
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(label),
-            layout,
-            entries: &entries,
         })
     }
 
@@ -367,7 +329,7 @@ impl Gpu {
                 bind_group_layouts: &[Some(layout)],
                 immediate_size: 0,
             });
-        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
+        let attributes = gbuffer::Vertex::ATTRIBUTES;
         self.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -377,7 +339,7 @@ impl Gpu {
                     entry_point: Some("vs"),
                     compilation_options: Default::default(),
                     buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 16,
+                        array_stride: std::mem::size_of::<gbuffer::Vertex>() as u64,
                         step_mode: wgpu::VertexStepMode::Vertex,
                         attributes: &attributes,
                     })],
@@ -445,20 +407,18 @@ pub(crate) struct PixelPass {
 }
 
 impl PixelPass {
-    /// `entries[i]` describes `resources[i]` at binding i.
+    /// The pass `pass` (one bind group) over `resources`, named as in its table.
     pub(crate) fn new(
         gpu: &Gpu,
-        label: &'static str,
-        wgsl: &str,
-        entries: &[wgpu::BindGroupLayoutEntry],
-        resources: &[wgpu::BindingResource],
+        pass: &'static bindings::Pass,
+        resources: &[(&str, wgpu::BindingResource)],
     ) -> Self {
-        let module = gpu.shader(label, wgsl);
-        let layout = gpu.layout(label, entries);
+        let module = pass.module(gpu);
+        let layouts = pass.layouts(gpu);
         PixelPass {
-            label,
-            pipeline: gpu.compute_pipeline(label, &module, "main", &[&layout]),
-            group: gpu.bind(label, &layout, resources),
+            label: pass.name,
+            pipeline: gpu.compute_pipeline(pass.name, &module, "main", &[&layouts[0]]),
+            group: pass.groups[0].bind(gpu, pass.name, &layouts[0], resources),
         }
     }
 

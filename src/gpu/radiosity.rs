@@ -3,7 +3,36 @@
 //! from the vertices, emission included), then resolved into a per-pixel HDR buffer. Its CPU
 //! twin is `radiosity::display::render_cpu`.
 
-use super::{gbuffer::target, storage_entry, texture_entry, uniform_entry, Gpu};
+use super::{gbuffer::target, Gpu};
+
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries,
+        })
+}
 use crate::image::Hdr;
 use crate::radiosity::display::Shaded;
 use crate::scene::Frame;
@@ -47,12 +76,13 @@ pub struct RadiosityPass {
 impl RadiosityPass {
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> Self {
         let module = gpu.shader("radiosity", include_str!("../../shaders/radiosity.wgsl"));
-        let raster_layout = gpu.layout(
+        let raster_layout = layout(
+            gpu,
             "radiosity raster",
-            &[uniform_entry(
+            &[entry(
                 0,
                 wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                false,
+                buffer_ty(wgpu::BufferBindingType::Uniform),
             )],
         );
         let pl = gpu
@@ -104,11 +134,14 @@ impl RadiosityPass {
             std::mem::size_of::<CameraUniform>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let raster_group = gpu.bind(
-            "radiosity raster",
-            &raster_layout,
-            &[camera.as_entire_binding()],
-        );
+        let raster_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("radiosity raster"),
+            layout: &raster_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera.as_entire_binding(),
+            }],
+        });
         let color = target(gpu, "radiosity", width, height, 1, FORMAT, true)
             .create_view(&Default::default());
         let depth = target(
@@ -134,12 +167,26 @@ impl RadiosityPass {
         gpu.queue
             .write_buffer(&size, 0, bytemuck::cast_slice(&[width, height, 0u32, 0u32]));
         // The resolve binds 1..3 (binding 0 is the raster's camera).
-        let resolve_layout = gpu.layout(
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let resolve_layout = layout(
+            gpu,
             "radiosity resolve",
             &[
-                uniform_entry(1, wgpu::ShaderStages::COMPUTE, false),
-                texture_entry(2, wgpu::TextureViewDimension::D2),
-                storage_entry(3, false),
+                entry(1, cs, buffer_ty(wgpu::BufferBindingType::Uniform)),
+                entry(
+                    2,
+                    cs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    3,
+                    cs,
+                    buffer_ty(wgpu::BufferBindingType::Storage { read_only: false }),
+                ),
             ],
         );
         let resolve =
