@@ -1,4 +1,4 @@
-//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf` and `mh` must
+//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection` and `mh` must
 //! average to what `uniform` averages to, and `mh` must keep most of its VPLs from frame to frame.
 
 use glam::Vec3;
@@ -100,12 +100,13 @@ fn run_with(p: SamplerParams, frames: u64, skip: u64) -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// On a fixed frame, the averages of many cdf estimates and of many mh chain steps (after
+/// On a fixed frame, the averages of many cdf and rejection estimates and of many mh chain steps (after
 /// burn-in) equal the uniform estimator's, per image quadrant, within 4 standard errors.
 #[test]
 fn cdf_and_mh_average_to_the_uniform_estimate() {
     let uniform = stats(&run(SamplerKind::Uniform, 240, 0), 240);
     let cdf = stats(&run(SamplerKind::Cdf, 240, 0), 240);
+    let rejection = stats(&run(SamplerKind::Rejection, 240, 0), 240);
     let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
     let escape = stats(
         &run_with(
@@ -119,7 +120,12 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         20,
     );
     for k in 0..4 {
-        for (name, e) in [("cdf", &cdf), ("mh", &mh), ("mh escape 8", &escape)] {
+        for (name, e) in [
+            ("cdf", &cdf),
+            ("rejection", &rejection),
+            ("mh", &mh),
+            ("mh escape 8", &escape),
+        ] {
             let z = (e.mean[k] - uniform.mean[k]).abs()
                 / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
             println!(
@@ -135,11 +141,13 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         }
         // The test has the power to see a wrong weight: one 30% too low (leaving out M/P
         // would be a factor of about 2.4) falls far outside the bound.
-        let wrong = cdf.mean[k] * 0.7;
-        assert!(
-            (wrong - uniform.mean[k]).abs()
-                > 4.0 * (cdf.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
-        );
+        for e in [&cdf, &rejection] {
+            let wrong = e.mean[k] * 0.7;
+            assert!(
+                (wrong - uniform.mean[k]).abs()
+                    > 4.0 * (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
+            );
+        }
     }
 }
 
@@ -168,7 +176,6 @@ fn mh_keeps_vpls_cdf_replaces_them() {
     assert!(cdf > 0.95, "cdf replaced {cdf}");
     assert!(mh < 0.75 && mh > 0.2, "mh replaced {mh}");
     assert!(lazy < 0.2, "mh at rate 0.2 replaced {lazy}");
-    let _ = Vec3::ZERO;
 }
 
 /// A kept slot keeps its VPL's identity and, in a still scene, its exact position and weight's
@@ -177,7 +184,13 @@ fn mh_keeps_vpls_cdf_replaces_them() {
 fn samplers_are_deterministic() {
     let scene = builtin::load("cornell-orbit").unwrap().unwrap();
     let tracer = Tracer::new(&scene.at(0.0));
-    for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {
+    for kind in [
+        SamplerKind::Uniform,
+        SamplerKind::Cdf,
+        SamplerKind::Mh,
+        SamplerKind::Frozen,
+        SamplerKind::Rejection,
+    ] {
         let mut a = Sampler::new(params(kind, 5));
         let mut b = Sampler::new(params(kind, 5));
         for f in 0..4 {
@@ -186,4 +199,54 @@ fn samplers_are_deterministic() {
             assert_eq!(x.shaded, y.shaded, "{kind:?} frame {f}");
         }
     }
+}
+
+/// `frozen` gives bitwise the same VPL set every frame of a still scene (uniform does not),
+/// and under a moving light the same paths, re-traced, so its VPLs move with the light.
+#[test]
+fn frozen_keeps_its_paths() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let mut frozen = Sampler::new(params(SamplerKind::Frozen, 4));
+    let mut uniform = Sampler::new(params(SamplerKind::Uniform, 4));
+    let first = frozen.select(&frame, &tracer, 0);
+    let u0 = uniform.select(&frame, &tracer, 0);
+    assert!(!first.vpls.is_empty());
+    for f in 1..5 {
+        let s = frozen.select(&frame, &tracer, f);
+        assert_eq!(s.vpls, first.vpls, "frame {f}");
+        assert_eq!(s.shaded, first.shaded, "frame {f}");
+        assert_eq!(s.replaced, 0.0);
+        assert_ne!(uniform.select(&frame, &tracer, f).vpls, u0.vpls);
+    }
+    // A moving light: the same path ids, but the VPLs have moved.
+    let scene = builtin::load("cornell-light").unwrap().unwrap();
+    let mut frozen = Sampler::new(SamplerParams {
+        slots: 256,
+        ..params(SamplerKind::Frozen, 4)
+    });
+    let (a, b) = (scene.at(0.0), scene.at(0.5));
+    let sa = frozen.select(&a, &Tracer::new(&a), 0);
+    let sb = frozen.select(&b, &Tracer::new(&b), 12);
+    // Both frames use paths 0..P of the same stream (paths that escape leave no VPL).
+    for s in [&sa, &sb] {
+        assert!(s.vpls.iter().all(|v| v.path < s.paths), "paths {}", s.paths);
+    }
+    let first_hit = |s: &irad::vpl::sampler::Selection, path: u64| {
+        s.vpls
+            .iter()
+            .find(|v| v.path == path && v.depth == 1)
+            .map(|v| v.position)
+    };
+    let common: Vec<(Vec3, Vec3)> = (0..sa.paths.min(sb.paths))
+        .filter_map(|p| Some((first_hit(&sa, p)?, first_hit(&sb, p)?)))
+        .collect();
+    let moved = common.iter().filter(|(x, y)| x.distance(*y) > 1e-3).count();
+    assert!(common.len() > 50, "{} paths in both frames", common.len());
+    assert!(
+        moved > common.len() / 2,
+        "moved {moved} of {}",
+        common.len()
+    );
 }

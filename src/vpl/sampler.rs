@@ -17,11 +17,19 @@
 //!   VPLs at once, where the proposals (mostly hidden too) keep them for frames, each with the
 //!   floor's large weight, and ISM light leaks times that weight shows as bright flashes.
 //!
-//! I always includes the defensive floor `eps * mean(I over the candidates)`.
+//! - `frozen`: `uniform` with the same light paths (path ids, so the same random numbers)
+//!   every frame, re-traced in each frame's scene: VPLs slide with moving lights and objects
+//!   and stay put in a still scene (what offline VPL renderers do for animations).
+//! - `rejection`: Georgiev and Slusallek's (2010) importance by rejection: fresh paths as for
+//!   `uniform`, each VPL kept with probability `p = min(1, I / I_target + eps)` and weighted
+//!   `1 / (p P)`, no normalization constant (`I_target`: mean I of a pilot set of paths).
+//!
+//! For cdf and mh, I includes the defensive floor `eps * mean(I over the candidates)`.
 
 mod cdf;
 mod common;
 mod mh;
+mod rejection;
 mod uniform;
 
 pub use common::{cdf_draw, mh_accept, PATHS_PER_FRAME};
@@ -41,6 +49,12 @@ pub enum SamplerKind {
     Cdf,
     /// One Metropolis-Hastings chain per slot: VPLs stay until a better one is proposed
     Mh,
+    /// Keller's instant radiosity with the same light paths every frame, re-traced in each
+    /// frame's scene
+    Frozen,
+    /// Importance by rejection (Georgiev and Slusallek 2010): keep a fresh VPL with
+    /// probability min(1, I / I_target + eps), weight 1 / p
+    Rejection,
 }
 
 /// The sampler's parameters.
@@ -104,6 +118,8 @@ impl Sampler {
             SamplerKind::Uniform => Box::new(uniform::Uniform::new(&params, false)),
             SamplerKind::Cdf => Box::new(cdf::Cdf::new(&params)),
             SamplerKind::Mh => Box::new(mh::Mh::new(&params)),
+            SamplerKind::Frozen => Box::new(uniform::Uniform::new(&params, true)),
+            SamplerKind::Rejection => Box::new(rejection::Rejection::new(&params)),
         };
         Sampler {
             params,
