@@ -124,6 +124,8 @@ fn main() -> anyhow::Result<()> {
         }
     };
     let numbers: Vec<u32> = (0..frames).collect();
+    let frames_only: Vec<Frame> = setup.iter().map(|s| s.0.clone()).collect();
+    let motion = irad::metrics::warp::motion(&frames_only, size, size);
     for c in &a[2..] {
         let mut it = c.split(':');
         let kind = <SamplerKind as clap::ValueEnum>::from_str(it.next().unwrap_or(""), true)
@@ -131,6 +133,7 @@ fn main() -> anyhow::Result<()> {
         let rate: f32 = it.next().map(|x| x.parse()).transpose()?.unwrap_or(1.0);
         let t = std::time::Instant::now();
         let (mut rel, mut f1, mut rep, mut first) = (0.0, 0.0, 0.0, String::new());
+        let mut wf1 = 0.0;
         for seed in 7..7 + seeds as u64 {
             let (imgs, replaced) = render(params(kind, 256, rate, dmin, seed, size));
             let m = irad::metrics::sequence(&numbers, &imgs, &reference)?;
@@ -138,11 +141,12 @@ fn main() -> anyhow::Result<()> {
                 first = format!("seed 7: {:.5} {:.5}", m.mean_rel_mse, m.flicker_f1);
             }
             rel += m.mean_rel_mse / seeds as f64;
+            wf1 += irad::metrics::warp::warped_f1(&imgs, &reference, &motion)?.f1 / seeds as f64;
             f1 += m.flicker_f1 / seeds as f64;
             rep += replaced / seeds as f32;
         }
         println!(
-            "{name} {c:14} relMSE {rel:.5} F1 {f1:.5} replaced {rep:.3} ({first}; {:.1} s)",
+            "{name} {c:14} relMSE {rel:.5} F1 {f1:.5} warped {wf1:.5} replaced {rep:.3} ({first}; {:.1} s)",
             t.elapsed().as_secs_f64()
         );
     }
