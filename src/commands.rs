@@ -179,8 +179,9 @@ pub struct RenderOpts {
     #[arg(long, default_value_t = 0.05)]
     pub eps: f32,
     /// MH: probability that a chain proposes in a frame (1: one step every frame; lower keeps
-    /// VPLs longer, at the cost of following a moving view more slowly)
-    #[arg(long, default_value_t = 1.0)]
+    /// VPLs longer, at the cost of following a moving view more slowly). 0.1 from a sweep of
+    /// flicker against error on five animations (examples/mh_probe.rs)
+    #[arg(long, default_value_t = 0.1)]
     pub mh_rate: f32,
     /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
     #[arg(long, default_value_t = 8)]
@@ -524,6 +525,28 @@ pub fn metrics_csv(m: &crate::metrics::SequenceMetrics) -> String {
         );
     }
     s
+}
+
+/// `irad metrics ... --scene S`: motion-compensated flicker of the frames of scene `S`.
+pub fn warped_metrics(
+    test: &Path,
+    reference: &Path,
+    scene: &str,
+    fps: f32,
+    out: Option<&Path>,
+) -> Result<()> {
+    let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
+    let scene = crate::scene::builtin::load_any(scene)?;
+    let w = crate::metrics::warp::for_scene(&scene, fps, &numbers, &t, &r)?;
+    println!(
+        "warped flicker F1 {:.5} ({:.1}% of pixels kept)",
+        w.f1,
+        100.0 * w.kept
+    );
+    let dir = out.unwrap_or(test);
+    report::write_json(&dir.join("warped.json"), &w)?;
+    println!("wrote {}/warped.json", dir.display());
+    Ok(())
 }
 
 /// `irad metrics TEST REFERENCE`: error and flicker of one image sequence against another.

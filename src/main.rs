@@ -52,6 +52,13 @@ enum Command {
         /// Where metrics.json and metrics.csv go [default: the test folder]
         #[arg(long)]
         out: Option<PathBuf>,
+        /// The scene the frames show (built-in name or glTF file): also the motion-compensated
+        /// flicker (warped.json)
+        #[arg(long)]
+        scene: Option<String>,
+        /// With --scene: frames per second (frame f is at time f / fps)
+        #[arg(long, default_value_t = 24.0)]
+        fps: f32,
     },
     /// Samplers x VPL counts on one animation against a cached reference: metrics, charts, report.html
     Compare(irad::report::compare::CompareOpts),
@@ -87,7 +94,16 @@ fn main() {
             test,
             reference,
             out,
-        } => irad::commands::metrics(&test, &reference, out.as_deref()).map(|_| ()),
+            scene,
+            fps,
+        } => irad::metrics::warp::check_fps(fps)
+            .and_then(|_| irad::commands::metrics(&test, &reference, out.as_deref()))
+            .and_then(|_| match scene {
+                Some(s) => {
+                    irad::commands::warped_metrics(&test, &reference, &s, fps, out.as_deref())
+                }
+                None => Ok(()),
+            }),
         Command::Compare(opts) => irad::report::compare::compare(&opts),
         Command::Info { backend } => irad::commands::info(backend),
         Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),

@@ -214,6 +214,33 @@ pub fn motion(frames: &[Frame], width: u32, height: u32) -> Vec<Vec<Option<Vec2>
         .collect()
 }
 
+/// `--fps` must be in (0, 1000].
+pub fn check_fps(fps: f32) -> Result<()> {
+    if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
+        bail!("--fps {fps} is out of range (0 to 1000)");
+    }
+    Ok(())
+}
+
+/// Warped F1 of frames `numbers` (frame f at time f / fps) of `scene`.
+pub fn for_scene(
+    scene: &crate::scene::Scene,
+    fps: f32,
+    numbers: &[u32],
+    test: &[Hdr],
+    reference: &[Hdr],
+) -> Result<WarpedFlicker> {
+    check_fps(fps)?;
+    if numbers.windows(2).any(|w| w[1] != w[0] + 1) {
+        bail!("warped flicker needs consecutive frame numbers");
+    }
+    let Some(first) = test.first() else {
+        bail!("no frames");
+    };
+    let frames: Vec<Frame> = numbers.iter().map(|&f| scene.at(f as f32 / fps)).collect();
+    warped_f1(test, reference, &motion(&frames, first.width, first.height))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

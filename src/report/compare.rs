@@ -41,7 +41,7 @@ pub struct CompareOpts {
     #[arg(long, value_enum, default_value = "auto")]
     pub backend: crate::gpu::BackendChoice,
     /// MH: probability that a chain proposes in a frame
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 0.1)]
     pub mh_rate: f32,
     /// MH: extra proposals for a chain whose VPL no camera point sees
     #[arg(long, default_value_t = 8)]
