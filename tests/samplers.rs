@@ -1,5 +1,6 @@
-//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection` and `mh` must
-//! average to what `uniform` averages to, and `mh` must keep most of its VPLs from frame to frame.
+//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection`
+//! and `mh` must average to what `uniform` averages to, `mh` must keep most of its VPLs from
+//! frame to frame, and `frozen` must keep its light paths.
 
 use glam::Vec3;
 use irad::math::luminance;
