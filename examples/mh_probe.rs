@@ -2,7 +2,7 @@
 //! (exact visibility, no GPU): `mh_probe SCENE CONFIG...` with CONFIG `kind[:mh_rate]`
 //! (kind: uniform, cdf, mh, frozen, rejection). Frames 0..24 at 24 fps, 256 VPLs, seed 7,
 //! 32x32 pixels (IRAD_PROBE_SIZE, IRAD_PROBE_FRAMES override; IRAD_PROBE_SEEDS averages seeds
-//! 7, 8, ...). Each image is emission +
+//! 7, 8, ...; IRAD_PROBE_M sets M / N, default 4). Each image is emission +
 //! direct (32 emitter samples, ray-traced shadows) + indirect; the reference's indirect is
 //! `frozen` with 16384 VPLs (the same paths in every frame, so its own noise hardly
 //! flickers), cached under /work/refcache. Prints relMSE, flicker F1 and VPLs replaced.
@@ -31,7 +31,7 @@ fn params(
     SamplerParams {
         kind,
         slots,
-        candidates: 4 * slots,
+        candidates: env("IRAD_PROBE_M", 4) as usize * slots,
         camera_points: 256,
         eps: 0.05,
         mh_rate: rate,
