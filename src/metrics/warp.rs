@@ -214,14 +214,6 @@ pub fn motion(frames: &[Frame], width: u32, height: u32) -> Vec<Vec<Option<Vec2>
         .collect()
 }
 
-/// `--fps` must be in (0, 1000].
-pub fn check_fps(fps: f32) -> Result<()> {
-    if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
-        bail!("--fps {fps} is out of range (0 to 1000)");
-    }
-    Ok(())
-}
-
 /// Warped F1 of frames `numbers` (frame f at time f / fps) of `scene`.
 pub fn for_scene(
     scene: &crate::scene::Scene,
@@ -230,7 +222,7 @@ pub fn for_scene(
     test: &[Hdr],
     reference: &[Hdr],
 ) -> Result<WarpedFlicker> {
-    check_fps(fps)?;
+    crate::config::check::float("--fps", fps, 0.0, true, 1000.0)?;
     if numbers.windows(2).any(|w| w[1] != w[0] + 1) {
         bail!("warped flicker needs consecutive frame numbers");
     }
