@@ -34,6 +34,13 @@ pub enum Command {
         /// Where metrics.json and metrics.csv go [default: the test folder]
         #[arg(long)]
         out: Option<PathBuf>,
+        /// The scene the frames show (built-in name or glTF file): also the motion-compensated
+        /// flicker (warped.json)
+        #[arg(long)]
+        scene: Option<String>,
+        /// With --scene: frames per second (frame f is at time f / fps)
+        #[arg(long, default_value_t = 24.0, allow_hyphen_values = true)]
+        fps: f32,
     },
     /// Print the graphics adapters found and the one irad chooses
     Info {
@@ -56,7 +63,10 @@ impl Command {
             Command::Reference(c) => c.validate(),
             Command::Compare(c) => c.validate(),
             Command::Bench(c) => c.validate(),
-            Command::Metrics { .. } | Command::Info { .. } | Command::Scenes { .. } => Ok(()),
+            Command::Metrics { fps, .. } => {
+                crate::config::check::float("--fps", *fps, 0.0, true, 1000.0)
+            }
+            Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
     }
 }
@@ -74,7 +84,15 @@ pub fn run(cli: Cli) -> Result<()> {
             test,
             reference,
             out,
-        } => commands::metrics::metrics(&test, &reference, out.as_deref()).map(|_| ()),
+            scene,
+            fps,
+        } => {
+            commands::metrics::metrics(&test, &reference, out.as_deref())?;
+            match scene {
+                Some(s) => commands::metrics::warped(&test, &reference, &s, fps, out.as_deref()),
+                None => Ok(()),
+            }
+        }
         Command::Info { backend } => commands::info(backend),
         Command::Scenes { generate } => commands::scenes(generate.as_deref()),
     }
