@@ -1,10 +1,13 @@
 //! Animations: channels of translation, rotation and scale keys on nodes.
 
-use super::buffers::Buffers;
-use super::{Ctx, LoadError};
+use super::buffers::{self, Buffers};
+use super::{Ctx, LoadError, MAX_COORD};
 use crate::scene::{anim, Local, Node};
 use glam::{Vec3, Vec4};
-use gltf::animation::util::ReadOutputs;
+use gltf::accessor::Dimensions;
+
+/// The latest key time irad accepts (seconds): about 11.6 days.
+const MAX_TIME: f32 = 1e6;
 
 /// Every channel of every animation; an animated node given by a matrix becomes TRS.
 pub(super) fn read(
@@ -41,24 +44,22 @@ fn channel(
     c: &gltf::animation::Channel,
     buffers: &Buffers,
 ) -> Result<Option<anim::Channel>, LoadError> {
-    let reader = c.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let Some(times) = reader.read_inputs() else {
-        return Err(cx.err(format!(
-            "animation {} has a channel without key times",
-            a.index()
-        )));
-    };
-    let times: Vec<f32> = times.collect();
+    let what = format!("key times of animation {}", a.index());
+    let input = c.sampler().input();
+    if input.dimensions() != Dimensions::Scalar {
+        return Err(cx.err(format!("accessor {} ({what}) is not SCALAR", input.index())));
+    }
+    let times = buffers::floats(cx, buffers, &input, &what)?;
     if times.is_empty()
-        || times.iter().any(|t| !t.is_finite())
+        || times.iter().any(|t| !t.is_finite() || t.abs() > MAX_TIME)
         || times.windows(2).any(|w| w[1] < w[0])
     {
         return Err(cx.err(format!(
-            "animation {} has key times that are empty, non-finite or not increasing",
+            "animation {} has key times that are empty, non-finite, beyond {MAX_TIME:e} s or not increasing",
             a.index()
         )));
     }
-    let Some((property, values)) = outputs(cx, a, reader.read_outputs())? else {
+    let Some((property, values)) = outputs(cx, a, c, buffers)? else {
         return Ok(None);
     };
     let interpolation = match c.sampler().interpolation() {
@@ -71,15 +72,20 @@ fn channel(
     } else {
         1
     };
-    if values.len() != times.len() * per_key || values.iter().any(|v| !v.is_finite()) {
+    if values.len() != times.len() * per_key
+        || values
+            .iter()
+            .any(|v| !v.is_finite() || v.abs().max_element() > MAX_COORD)
+    {
         return Err(cx.err(format!(
-            "animation {} has {} values for {} keys (needs {} finite values)",
+            "animation {} has {} values for {} keys (needs {} finite values, each within {MAX_COORD:e})",
             a.index(),
             values.len(),
             times.len(),
             times.len() * per_key
         )));
     }
+    check_rotations(cx, a, property, interpolation, &values)?;
     Ok(Some(anim::Channel {
         node: c.target().node().index(),
         property,
@@ -89,34 +95,63 @@ fn channel(
     }))
 }
 
+/// Rotation keys are quaternions of non-zero length (tangents may be zero).
+fn check_rotations(
+    cx: &Ctx,
+    a: &gltf::Animation,
+    property: anim::Property,
+    interpolation: anim::Interpolation,
+    values: &[Vec4],
+) -> Result<(), LoadError> {
+    if property != anim::Property::Rotation {
+        return Ok(());
+    }
+    let keys: Vec<&Vec4> = match interpolation {
+        anim::Interpolation::CubicSpline => values.iter().skip(1).step_by(3).collect(),
+        _ => values.iter().collect(),
+    };
+    if let Some(k) = keys.iter().position(|q| q.length_squared() < 1e-12) {
+        return Err(cx.err(format!(
+            "animation {} has a zero quaternion as rotation key {k}, which is no rotation",
+            a.index()
+        )));
+    }
+    Ok(())
+}
+
 /// The channel's key values as Vec4s, or None for morph-target weights (ignored).
 fn outputs(
     cx: &mut Ctx,
     a: &gltf::Animation,
-    outputs: Option<ReadOutputs>,
+    c: &gltf::animation::Channel,
+    buffers: &Buffers,
 ) -> Result<Option<(anim::Property, Vec<Vec4>)>, LoadError> {
-    Ok(Some(match outputs {
-        Some(ReadOutputs::Translations(v)) => (
-            anim::Property::Translation,
-            v.map(|x| Vec3::from(x).extend(0.0)).collect(),
-        ),
-        Some(ReadOutputs::Scales(v)) => (
-            anim::Property::Scale,
-            v.map(|x| Vec3::from(x).extend(0.0)).collect(),
-        ),
-        Some(ReadOutputs::Rotations(r)) => (
-            anim::Property::Rotation,
-            r.into_f32().map(Vec4::from).collect(),
-        ),
-        Some(ReadOutputs::MorphTargetWeights(_)) => {
+    let (property, dims) = match c.target().property() {
+        gltf::animation::Property::Translation => (anim::Property::Translation, Dimensions::Vec3),
+        gltf::animation::Property::Scale => (anim::Property::Scale, Dimensions::Vec3),
+        gltf::animation::Property::Rotation => (anim::Property::Rotation, Dimensions::Vec4),
+        gltf::animation::Property::MorphTargetWeights => {
             cx.warn("morph-target weight animations are ignored");
             return Ok(None);
         }
-        None => {
-            return Err(cx.err(format!(
-                "animation {} has a channel without values",
-                a.index()
-            )))
-        }
-    }))
+    };
+    let acc = c.sampler().output();
+    let what = format!("values of animation {}", a.index());
+    if acc.dimensions() != dims {
+        return Err(cx.err(format!(
+            "accessor {} ({what}) is {:?}, but a {:?} channel needs {dims:?}",
+            acc.index(),
+            acc.dimensions(),
+            property
+        )));
+    }
+    let flat = buffers::floats(cx, buffers, &acc, &what)?;
+    let values = match dims {
+        Dimensions::Vec3 => flat
+            .chunks_exact(3)
+            .map(|x| Vec3::from_slice(x).extend(0.0))
+            .collect(),
+        _ => flat.chunks_exact(4).map(Vec4::from_slice).collect(),
+    };
+    Ok(Some((property, values)))
 }

@@ -5,6 +5,9 @@ use super::{Ctx, LoadError};
 use crate::scene::Material;
 use glam::{Vec3, Vec4};
 
+/// The largest emitted radiance irad accepts, per channel.
+const MAX_RADIANCE: f32 = 1e8;
+
 /// Every material of the file, then the glTF default material (white, not emitting) last.
 pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document) -> Result<Vec<Material>, LoadError> {
     let mut materials = Vec::new();
@@ -15,6 +18,7 @@ pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document) -> Result<Vec<Material>, 
         name: "default".into(),
         albedo: Vec3::splat(1.0),
         emission: Vec3::ZERO,
+        double_sided: false,
     });
     Ok(materials)
 }
@@ -47,9 +51,17 @@ fn one(cx: &mut Ctx, m: &gltf::Material) -> Result<Material, LoadError> {
             m.index().unwrap_or(0)
         )));
     }
+    if emission.max_element() > MAX_RADIANCE {
+        return Err(cx.err(format!(
+            "material {} ('{}') emits {emission}, above irad's limit of {MAX_RADIANCE:e} (light is summed in 32-bit floats; the sun's radiance is about 2e7)",
+            m.index().unwrap_or(0),
+            m.name().unwrap_or("")
+        )));
+    }
     Ok(Material {
         name: m.name().unwrap_or("").to_string(),
         albedo,
         emission,
+        double_sided: m.double_sided(),
     })
 }

@@ -1,9 +1,11 @@
 //! Meshes: each primitive's positions and indices as a triangle list in its node's space.
+//! Triangle strips and fans become lists with glTF's winding; points and lines are skipped.
 
-use super::buffers::Buffers;
-use super::{Ctx, LoadError};
+use super::buffers::{self, Buffers};
+use super::{Ctx, LoadError, MAX_COORD};
 use crate::scene::Primitive;
 use glam::Vec3;
+use gltf::mesh::{Mode, Semantic};
 use std::collections::BTreeSet;
 
 /// Every mesh as a list of triangle primitives; `default_material` stands in where a
@@ -20,7 +22,10 @@ pub(super) fn read(
     for mesh in doc.meshes() {
         let mut prims = Vec::new();
         for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
+            if !matches!(
+                prim.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
                 skipped_modes.insert(format!("{:?}", prim.mode()));
                 continue;
             }
@@ -52,27 +57,11 @@ fn primitive(
     buffers: &Buffers,
     default_material: usize,
 ) -> Result<Primitive, LoadError> {
-    if prim.morph_targets().next().is_some() {
-        cx.warn("morph targets are ignored");
-    }
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let Some(pos) = reader.read_positions() else {
-        return Err(cx.err(format!(
-            "mesh {} has a primitive without POSITION",
-            mesh.index()
-        )));
-    };
-    let positions: Vec<Vec3> = pos.map(Vec3::from).collect();
-    if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(cx.err(format!(
-            "mesh {} ('{}') has a NaN or infinite position at vertex {bad}: {}",
-            mesh.index(),
-            mesh.name().unwrap_or(""),
-            positions[bad]
-        )));
-    }
-    let indices: Vec<u32> = match reader.read_indices() {
-        Some(i) => i.into_u32().collect(),
+    warn_ignored(cx, prim);
+    let positions = positions(cx, mesh, prim, buffers)?;
+    let what = format!("indices of mesh {}", mesh.index());
+    let indices: Vec<u32> = match prim.indices() {
+        Some(acc) => buffers::indices(cx, buffers, &acc, &what)?,
         None => (0..positions.len() as u32).collect(),
     };
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
@@ -82,10 +71,90 @@ fn primitive(
             positions.len()
         )));
     }
-    let indices = indices[..indices.len() / 3 * 3].to_vec();
     Ok(Primitive {
         positions,
-        indices,
+        indices: triangle_list(prim.mode(), &indices),
         material: prim.material().index().unwrap_or(default_material),
     })
+}
+
+/// One warning per kind of vertex data irad does not use, saying what it changes.
+fn warn_ignored(cx: &mut Ctx, prim: &gltf::Primitive) {
+    if prim.morph_targets().next().is_some() {
+        cx.warn("morph targets are ignored: meshes keep their base shape");
+    }
+    for (sem, _) in prim.attributes() {
+        match sem {
+            Semantic::Colors(_) => cx.warn(
+                "vertex colours (COLOR_n) are ignored: surfaces take their material's baseColorFactor only",
+            ),
+            Semantic::Normals => cx.warn(
+                "vertex normals (NORMAL) are ignored: each triangle is shaded flat with its geometric normal",
+            ),
+            _ => {}
+        }
+    }
+}
+
+/// POSITION as finite VEC3s within irad's coordinate limit (any component type, so
+/// KHR_mesh_quantization's integer positions read too).
+fn positions(
+    cx: &Ctx,
+    mesh: &gltf::Mesh,
+    prim: &gltf::Primitive,
+    buffers: &Buffers,
+) -> Result<Vec<Vec3>, LoadError> {
+    let Some(acc) = prim.get(&Semantic::Positions) else {
+        return Err(cx.err(format!(
+            "mesh {} has a primitive without POSITION",
+            mesh.index()
+        )));
+    };
+    if acc.dimensions() != gltf::accessor::Dimensions::Vec3 {
+        return Err(cx.err(format!(
+            "accessor {} (POSITION of mesh {}) is {:?}, not VEC3",
+            acc.index(),
+            mesh.index(),
+            acc.dimensions()
+        )));
+    }
+    let what = format!("POSITION of mesh {}", mesh.index());
+    let flat = buffers::floats(cx, buffers, &acc, &what)?;
+    let positions: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
+    if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(cx.err(format!(
+            "mesh {} ('{}') has a NaN or infinite position at vertex {bad}: {}",
+            mesh.index(),
+            mesh.name().unwrap_or(""),
+            positions[bad]
+        )));
+    }
+    if let Some(bad) = positions
+        .iter()
+        .position(|p| p.abs().max_element() > MAX_COORD)
+    {
+        return Err(cx.err(format!(
+            "mesh {} ('{}') has vertex {bad} at {}, beyond irad's coordinate limit of {MAX_COORD:e}",
+            mesh.index(),
+            mesh.name().unwrap_or(""),
+            positions[bad]
+        )));
+    }
+    Ok(positions)
+}
+
+/// Indices of a triangle list, strip or fan as a list (glTF 2.0 section 3.7.2.1: strip
+/// triangle i is (i, i+1+i%2, i+2-i%2), fan triangle i is (i+1, i+2, 0)); a list's trailing
+/// partial triangle is dropped.
+fn triangle_list(mode: Mode, idx: &[u32]) -> Vec<u32> {
+    let n = idx.len();
+    match mode {
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .flat_map(|i| [idx[i], idx[i + 1 + i % 2], idx[i + 2 - i % 2]])
+            .collect(),
+        Mode::TriangleFan => (0..n.saturating_sub(2))
+            .flat_map(|i| [idx[i + 1], idx[i + 2], idx[0]])
+            .collect(),
+        _ => idx[..n / 3 * 3].to_vec(),
+    }
 }

@@ -1,7 +1,7 @@
 //! Nodes: local transforms, the tree under the scene's roots, and the camera in use.
 
-use super::{Ctx, LoadError};
-use crate::scene::{CameraDef, Local, Node};
+use super::{camera, Ctx, LoadError};
+use crate::scene::{Local, Node};
 use glam::{Mat4, Quat, Vec3};
 
 /// The node tree as the scene will use it.
@@ -21,7 +21,9 @@ pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document) -> Result<Graph, LoadErro
         }
         nodes.push(node);
     }
+    check_tree(cx, &nodes)?;
     let roots = roots(doc, &nodes);
+    check_roots(cx, &nodes, &roots)?;
     // Only cameras reachable from the roots count.
     let reachable = reachable(&nodes, &roots);
     let camera_node = first_camera
@@ -36,12 +38,8 @@ pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document) -> Result<Graph, LoadErro
 
 fn one(cx: &mut Ctx, n: &gltf::Node) -> Result<Node, LoadError> {
     let local = local(cx, n)?;
-    let camera = match n.camera().as_ref().map(|c| c.projection()) {
-        Some(gltf::camera::Projection::Perspective(p)) => Some(CameraDef { yfov: p.yfov() }),
-        Some(gltf::camera::Projection::Orthographic(_)) => {
-            cx.warn("orthographic cameras are ignored");
-            None
-        }
+    let camera = match n.camera() {
+        Some(c) => camera::read(cx, &c)?,
         None => None,
     };
     Ok(Node {
@@ -74,6 +72,12 @@ fn local(cx: &Ctx, n: &gltf::Node) -> Result<Local, LoadError> {
             );
             if !(t.is_finite() && r.is_finite() && s.is_finite()) {
                 return Err(cx.err(format!("node {} has a non-finite transform", n.index())));
+            }
+            if r.length_squared() < 1e-12 {
+                return Err(cx.err(format!(
+                    "node {} has the rotation {r}, a zero quaternion, which is no rotation (glTF needs unit quaternions)",
+                    n.index()
+                )));
             }
             Ok(Local::Trs {
                 translation: t,
@@ -109,4 +113,52 @@ fn reachable(nodes: &[Node], roots: &[usize]) -> Vec<bool> {
         }
     }
     seen
+}
+
+/// glTF nodes form disjoint trees: one parent at most, no cycles (glTF 2.0 section 3.5.3).
+/// A graph that shares children could instance a node along exponentially many paths.
+fn check_tree(cx: &Ctx, nodes: &[Node]) -> Result<(), LoadError> {
+    let mut parent = vec![None; nodes.len()];
+    for (p, n) in nodes.iter().enumerate() {
+        for &c in &n.children {
+            if parent[c] == Some(p) {
+                return Err(cx.err(format!(
+                    "node {p} lists node {c} twice among its children; glTF nodes form trees"
+                )));
+            }
+            if let Some(q) = parent[c].replace(p) {
+                return Err(cx.err(format!(
+                    "node {c} ('{}') is a child of node {q} and of node {p}; glTF nodes form trees, one parent each",
+                    nodes[c].name
+                )));
+            }
+        }
+    }
+    let tops: Vec<usize> = (0..nodes.len()).filter(|&i| parent[i].is_none()).collect();
+    let seen = reachable(nodes, &tops);
+    if let Some(c) = seen.iter().position(|&s| !s) {
+        return Err(cx.err(format!(
+            "node {c} ('{}') is in or under a cycle of children: no node without a parent leads to it",
+            nodes[c].name
+        )));
+    }
+    Ok(())
+}
+
+/// A scene's roots are distinct nodes without a parent, so every node is reached once.
+fn check_roots(cx: &Ctx, nodes: &[Node], roots: &[usize]) -> Result<(), LoadError> {
+    let mut is_root = vec![false; nodes.len()];
+    for &r in roots {
+        if std::mem::replace(&mut is_root[r], true) {
+            return Err(cx.err(format!("the scene lists node {r} twice")));
+        }
+    }
+    for (p, n) in nodes.iter().enumerate() {
+        if let Some(&c) = n.children.iter().find(|&&c| is_root[c]) {
+            return Err(cx.err(format!(
+                "node {c} is a root of the scene and also a child of node {p}"
+            )));
+        }
+    }
+    Ok(())
 }
