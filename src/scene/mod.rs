@@ -5,6 +5,8 @@
 pub mod anim;
 pub mod builtin;
 pub mod camera;
+pub mod framing;
+pub mod inspect;
 pub mod load;
 
 use glam::{Mat4, Quat, Vec3};
@@ -165,6 +167,40 @@ pub(crate) fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
 }
 
 impl Scene {
+    /// Renders from `eye` toward `target` with vertical field of view `yfov` (radians)
+    /// instead of the file's camera (up is +Y, or +Z when looking straight up or down). The
+    /// message says which of the three is wrong.
+    pub fn set_camera(&mut self, eye: Vec3, target: Vec3, yfov: f32) -> Result<(), String> {
+        let lim = load::MAX_COORD;
+        for (what, p) in [("eye", eye), ("target", target)] {
+            if !p.is_finite() || p.abs().max_element() > lim {
+                return Err(format!(
+                    "the {what} {p} is not a finite point within {lim:e} of the origin"
+                ));
+            }
+        }
+        let d = target - eye;
+        if d.length() <= 1e-6 * eye.abs().max_element().max(1.0) {
+            return Err(format!("the eye and the target are the same point {eye}"));
+        }
+        let (lo, hi) = load::FOV_RANGE;
+        if !(lo..=hi).contains(&yfov) {
+            return Err(format!(
+                "the field of view {yfov} rad ({:.1} degrees) is outside {lo}..{hi} rad",
+                yfov.to_degrees()
+            ));
+        }
+        let up = if d.normalize().y.abs() > 0.99 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        let (eye, target) = (eye + self.shift, target + self.shift);
+        self.default_camera = Camera::look_at(eye, target, up, yfov);
+        self.camera_node = None;
+        Ok(())
+    }
+
     /// Length of the animation in seconds (0 for a still scene).
     pub fn duration(&self) -> f32 {
         self.channels

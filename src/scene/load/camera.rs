@@ -5,7 +5,7 @@ use crate::scene::CameraDef;
 
 /// The narrowest and widest vertical fields of view irad renders (radians): at 0 every ray is
 /// the same, at pi the image plane is infinitely wide.
-pub(crate) const FOV_RANGE: (f32, f32) = (1e-3, 3.1);
+pub const FOV_RANGE: (f32, f32) = (1e-3, 3.1);
 
 /// A perspective camera, or None (with a warning) for an orthographic one.
 pub(super) fn read(cx: &mut Ctx, c: &gltf::Camera) -> Result<Option<CameraDef>, LoadError> {

@@ -13,7 +13,7 @@ mod material;
 mod mesh;
 mod nodes;
 
-pub(crate) use camera::FOV_RANGE;
+pub use camera::FOV_RANGE;
 
 use super::{Camera, Scene};
 use glam::Vec3;
@@ -34,7 +34,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_
 
 /// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
 /// distances and areas overflow 32-bit floats.
-pub(crate) const MAX_COORD: f32 = 1e9;
+pub const MAX_COORD: f32 = 1e9;
 
 /// The most triangles a scene may instance (each costs about 100 bytes per frame).
 pub const MAX_TRIANGLES: usize = 1 << 24;
@@ -223,10 +223,12 @@ fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
         return Err(cx.err("no triangles in the scene's node tree"));
     }
     recenter(&mut cx, &mut scene, frame0.bounds());
-    let (lo, hi) = scene.at(0.0).bounds();
+    let frame = scene.at(0.0);
+    let (lo, hi) = frame.bounds();
     scene.default_camera = Camera::framing(lo, hi);
     if scene.camera_node.is_none() {
-        cx.warn("no perspective camera: using a default camera that frames the scene from +Z");
+        scene.default_camera = crate::scene::framing::lit_camera(&frame);
+        cx.warn("no perspective camera: using one that frames what the lights light");
     }
     check_times(&cx, &scene)?;
     let file = cx.file;

@@ -2,6 +2,8 @@
 //! by the generator in this file (`irad scenes --generate scenes/` writes them again; a test
 //! checks that the committed files are exactly what the generator makes).
 
+mod atrium;
+
 use super::{load, Scene};
 use base64::Engine;
 use glam::{Quat, Vec3};
@@ -18,32 +20,37 @@ pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "cornell",
         stresses: "the classic Cornell box (Mitsuba 3's), still: the baseline every metric is held to",
-        gltf: include_str!("../../scenes/cornell.gltf"),
+        gltf: include_str!("../../../scenes/cornell.gltf"),
     },
     Builtin {
         name: "cornell-orbit",
         stresses: "the camera swings 12 degrees either side of the box over 3 s: importance changes with the view, so CDF sampling re-maps its VPLs",
-        gltf: include_str!("../../scenes/cornell-orbit.gltf"),
+        gltf: include_str!("../../../scenes/cornell-orbit.gltf"),
     },
     Builtin {
         name: "cornell-light",
         stresses: "the light slides across the ceiling over 3 s (cubic spline): every light path moves, chains must follow",
-        gltf: include_str!("../../scenes/cornell-light.gltf"),
+        gltf: include_str!("../../../scenes/cornell-light.gltf"),
     },
     Builtin {
         name: "cornell-box",
         stresses: "the small box slides and turns across the floor over 3 s: moving occluder, BVH rebuilds and moving ISM points",
-        gltf: include_str!("../../scenes/cornell-box.gltf"),
+        gltf: include_str!("../../../scenes/cornell-box.gltf"),
     },
     Builtin {
         name: "two-rooms",
         stresses: "importance decides: the light is in one room, the camera walks through the door into the other over 3 s; most plain VPLs land where the camera cannot see",
-        gltf: include_str!("../../scenes/two-rooms.gltf"),
+        gltf: include_str!("../../../scenes/two-rooms.gltf"),
     },
     Builtin {
         name: "furnace",
         stresses: "white furnace: a closed box, albedo 0.5, every wall emits 1: radiance is exactly 2 everywhere",
-        gltf: include_str!("../../scenes/furnace.gltf"),
+        gltf: include_str!("../../../scenes/furnace.gltf"),
+    },
+    Builtin {
+        name: "atrium",
+        stresses: "Sponza-class: a 30 x 14 m court with two storeys of arcades (about 130k triangles), lit by a sun high above the open roof that slides across the sky over 4 s: scale, deep occlusion, light mostly arriving by bounces",
+        gltf: include_str!("../../../scenes/atrium.gltf"),
     },
 ];
 
@@ -125,6 +132,7 @@ pub fn generate(name: &str) -> Option<String> {
             b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
         }
         "two-rooms" => two_rooms(&mut b),
+        "atrium" => atrium::atrium(&mut b),
         "furnace" => {
             let m = b.material("furnace", [0.5; 3], [1.0; 3]);
             let mut nodes = Vec::new();
