@@ -60,8 +60,11 @@ enum Command {
         #[arg(long, value_enum, default_value = "auto")]
         backend: irad::gpu::BackendChoice,
     },
-    /// List the built-in scenes and what each stresses
+    /// List the built-in scenes and what each stresses, or inspect one scene
     Scenes {
+        /// A built-in scene name or a .gltf/.glb path: print its triangles, emitters and their
+        /// power, cameras, animation, bounds and the loader's warnings
+        scene: Option<String>,
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
         #[arg(long)]
         generate: Option<PathBuf>,
@@ -90,7 +93,9 @@ fn main() {
         } => irad::commands::metrics(&test, &reference, out.as_deref()).map(|_| ()),
         Command::Compare(opts) => irad::report::compare::compare(&opts),
         Command::Info { backend } => irad::commands::info(backend),
-        Command::Scenes { generate } => irad::commands::scenes(generate.as_deref()),
+        Command::Scenes { scene, generate } => {
+            irad::commands::scenes(scene.as_deref(), generate.as_deref())
+        }
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");
