@@ -635,3 +635,31 @@ fn inspection_reports_what_the_file_holds() {
         assert!(text.contains(line), "'{line}' missing from:\n{text}");
     }
 }
+
+#[test]
+fn punctual_lights_are_named_where_they_are_ignored() {
+    // Issue 11 item 1 is not done: a file lit only by KHR_lights_punctual is refused, and the
+    // message says why instead of only "no emitter".
+    let lights = json!({ "lights": [
+        { "type": "point", "intensity": 10.0 },
+        { "type": "point", "intensity": 5.0 },
+        { "type": "spot", "spot": {} },
+    ] });
+    let (g, mut doc) = lit();
+    doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    doc["extensions"] = json!({ "KHR_lights_punctual": lights });
+    let s = load(&g.finish(doc.clone())).unwrap();
+    assert_eq!(
+        s.warnings,
+        ["test.gltf: KHR_lights_punctual lights (2 point, 1 spot) are ignored: only emissive triangles light the scene"]
+    );
+    let (g, _) = lit();
+    doc["materials"][1]
+        .as_object_mut()
+        .unwrap()
+        .remove("emissiveFactor");
+    refused(
+        &g.finish(doc),
+        &["no emitter", "KHR_lights_punctual lights, 2 point, 1 spot"],
+    );
+}

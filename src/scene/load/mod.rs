@@ -46,6 +46,8 @@ const CHECK_SAMPLES: usize = 64;
 struct Ctx<'a> {
     file: &'a str,
     warnings: BTreeSet<String>,
+    /// The file's KHR_lights_punctual lights by kind ("2 point, 1 spot"), empty if none.
+    punctual: String,
 }
 
 impl Ctx<'_> {
@@ -85,6 +87,7 @@ pub fn load_slice(
     let mut cx = Ctx {
         file,
         warnings: BTreeSet::new(),
+        punctual: String::new(),
     };
     let gltf = parse(&cx, bytes)?;
     let doc = &gltf.document;
@@ -162,8 +165,15 @@ fn parse(cx: &Ctx, bytes: &[u8]) -> Result<gltf::Gltf, LoadError> {
 
 /// One warning per kind of thing in the file that irad ignores as a whole.
 fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
+    cx.punctual = punctual_lights(doc);
     for ext in doc.extensions_used() {
-        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+        if ext == "KHR_lights_punctual" && !cx.punctual.is_empty() {
+            let w = format!(
+                "KHR_lights_punctual lights ({}) are ignored: only emissive triangles light the scene",
+                cx.punctual
+            );
+            cx.warn(w);
+        } else if !SUPPORTED_EXTENSIONS.contains(&ext) {
             cx.warn(format!("extension {ext} is ignored"));
         }
     }
@@ -173,6 +183,24 @@ fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
     if doc.skins().next().is_some() {
         cx.warn("skins are ignored");
     }
+}
+
+/// The KHR_lights_punctual lights the file defines, counted by type ("2 point, 1 spot").
+fn punctual_lights(doc: &gltf::Document) -> String {
+    let lights = doc
+        .extension_value("KHR_lights_punctual")
+        .and_then(|v| v.get("lights"))
+        .and_then(|v| v.as_array());
+    let mut kinds = std::collections::BTreeMap::new();
+    for l in lights.into_iter().flatten() {
+        let t = l.get("type").and_then(|t| t.as_str()).unwrap_or("unknown");
+        *kinds.entry(t.to_string()).or_insert(0usize) += 1;
+    }
+    kinds
+        .iter()
+        .map(|(t, n)| format!("{n} {t}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A .glb's header and chunk lengths fit in the file: a cut-off download says "truncated".
@@ -318,9 +346,13 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
         lit |= !f.emitters.tris.is_empty();
     }
     if !lit {
-        return Err(cx.err(
-            "no emitter: no triangle has a material with emissiveFactor > 0, so there is nothing to light the scene",
-        ));
+        let punctual = match cx.punctual.as_str() {
+            "" => String::new(),
+            p => format!(" (its KHR_lights_punctual lights, {p}, are not rendered by irad yet)"),
+        };
+        return Err(cx.err(format!(
+            "no emitter: no triangle has a material with emissiveFactor > 0, so there is nothing to light the scene{punctual}"
+        )));
     }
     Ok(())
 }
