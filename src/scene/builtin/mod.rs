@@ -90,64 +90,76 @@ pub fn generate(name: &str) -> Option<String> {
         "cornell" => {
             cornell(&mut b);
         }
-        "cornell-orbit" => {
-            let n = cornell(&mut b);
-            let times: Vec<f32> = (0..=12).map(|i| i as f32 * 0.25).collect();
-            let angle = |t: f32| 12f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
-            let pos: Vec<f32> = times
-                .iter()
-                .flat_map(|&t| [3.9 * angle(t).sin(), 0.0, 3.9 * angle(t).cos()])
-                .collect();
-            let rot: Vec<f32> = times
-                .iter()
-                .flat_map(|&t| Quat::from_rotation_y(angle(t)).to_array())
-                .collect();
-            b.animate("orbit", n.camera, "translation", "LINEAR", &times, &pos);
-            b.animate("orbit", n.camera, "rotation", "LINEAR", &times, &rot);
-        }
-        "cornell-light" => {
-            let n = cornell(&mut b);
-            // CUBICSPLINE keys (in-tangent, value, out-tangent): ease from x=-0.5 to 0.5 and back.
-            let times = [0.0, 1.5, 3.0];
-            let key = |x: f32| [0.0, 0.0, 0.0, x, 0.99, 0.01, 0.0, 0.0, 0.0];
-            let values: Vec<f32> = [-0.5, 0.5, -0.5].iter().flat_map(|&x| key(x)).collect();
-            b.animate(
-                "slide",
-                n.light,
-                "translation",
-                "CUBICSPLINE",
-                &times,
-                &values,
-            );
-        }
-        "cornell-box" => {
-            let n = cornell(&mut b);
-            let times = [0.0, 1.5, 3.0];
-            let pos = [0.335, -0.7, 0.38, -0.25, -0.7, 0.6, 0.335, -0.7, 0.38];
-            let rot: Vec<f32> = [-17.0f32, 30.0, -17.0]
-                .iter()
-                .flat_map(|a| Quat::from_rotation_y(a.to_radians()).to_array())
-                .collect();
-            b.animate("slide", n.small_box, "translation", "LINEAR", &times, &pos);
-            b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
-        }
+        "cornell-orbit" => cornell_orbit(&mut b),
+        "cornell-light" => cornell_light(&mut b),
+        "cornell-box" => cornell_box(&mut b),
         "two-rooms" => two_rooms(&mut b),
         "atrium" => atrium::atrium(&mut b),
-        "furnace" => {
-            let m = b.material("furnace", [0.5; 3], [1.0; 3]);
-            let mut nodes = Vec::new();
-            for (c, u, v) in cube_faces() {
-                // Inward-facing walls: swap u and v to flip the winding.
-                let mesh = b.quad_mesh("wall", c, v, u, m);
-                nodes.push(b.node(json!({ "name": "wall", "mesh": mesh })));
-            }
-            let cam = b.camera_node([0.0, 0.0, 0.5], Quat::IDENTITY, 60.0);
-            nodes.push(cam);
-            b.roots = nodes;
-        }
+        "furnace" => furnace(&mut b),
         _ => return None,
     }
     Some(b.finish(name))
+}
+
+/// The Cornell box with the camera swinging 12 degrees either side over 3 s.
+fn cornell_orbit(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    let times: Vec<f32> = (0..=12).map(|i| i as f32 * 0.25).collect();
+    let angle = |t: f32| 12f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
+    let pos: Vec<f32> = times
+        .iter()
+        .flat_map(|&t| [3.9 * angle(t).sin(), 0.0, 3.9 * angle(t).cos()])
+        .collect();
+    let rot: Vec<f32> = times
+        .iter()
+        .flat_map(|&t| Quat::from_rotation_y(angle(t)).to_array())
+        .collect();
+    b.animate("orbit", n.camera, "translation", "LINEAR", &times, &pos);
+    b.animate("orbit", n.camera, "rotation", "LINEAR", &times, &rot);
+}
+
+/// The Cornell box with the light sliding across the ceiling (cubic spline).
+fn cornell_light(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    // CUBICSPLINE keys (in-tangent, value, out-tangent): ease from x=-0.5 to 0.5 and back.
+    let times = [0.0, 1.5, 3.0];
+    let key = |x: f32| [0.0, 0.0, 0.0, x, 0.99, 0.01, 0.0, 0.0, 0.0];
+    let values: Vec<f32> = [-0.5, 0.5, -0.5].iter().flat_map(|&x| key(x)).collect();
+    b.animate(
+        "slide",
+        n.light,
+        "translation",
+        "CUBICSPLINE",
+        &times,
+        &values,
+    );
+}
+
+/// The Cornell box with the small box sliding and turning across the floor.
+fn cornell_box(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    let times = [0.0, 1.5, 3.0];
+    let pos = [0.335, -0.7, 0.38, -0.25, -0.7, 0.6, 0.335, -0.7, 0.38];
+    let rot: Vec<f32> = [-17.0f32, 30.0, -17.0]
+        .iter()
+        .flat_map(|a| Quat::from_rotation_y(a.to_radians()).to_array())
+        .collect();
+    b.animate("slide", n.small_box, "translation", "LINEAR", &times, &pos);
+    b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
+}
+
+/// White furnace: a closed box of albedo 0.5 whose walls all emit 1.
+fn furnace(b: &mut GltfBuilder) {
+    let m = b.material("furnace", [0.5; 3], [1.0; 3]);
+    let mut nodes = Vec::new();
+    for (c, u, v) in cube_faces() {
+        // Inward-facing walls: swap u and v to flip the winding.
+        let mesh = b.quad_mesh("wall", c, v, u, m);
+        nodes.push(b.node(json!({ "name": "wall", "mesh": mesh })));
+    }
+    let cam = b.camera_node([0.0, 0.0, 0.5], Quat::IDENTITY, 60.0);
+    nodes.push(cam);
+    b.roots = nodes;
 }
 
 /// The six faces of the cube [-1,1]^3 as (center, u, v) with outward normal u x v.
@@ -219,7 +231,11 @@ fn two_rooms(b: &mut GltfBuilder) {
     let cam = b.camera_node([-1.5, 1.3, 0.2], look_x, 60.0);
     roots.push(cam);
     b.roots = roots;
-    // Walk through the door, turning toward the box.
+    walk(b, cam);
+}
+
+/// The two-rooms camera walks through the door over 3 s, turning toward the box.
+fn walk(b: &mut GltfBuilder, cam: usize) {
     let times = [0.0, 3.0];
     b.animate(
         "walk",
