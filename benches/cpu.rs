@@ -93,7 +93,7 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
-    let s = irad::reference::Settings {
+    let s = irad::reference::Params {
         width: 32,
         height: 32,
         spp: 4,

@@ -1,50 +1,33 @@
 //! Renders one frame on the GPU with its components and the CPU twin's, for inspection:
 //! `twin SCENE FRAME OUTDIR`.
-use irad::frame::{Pipeline, SamplerKind, Settings};
-use irad::gpu::{BackendChoice, RendererConfig};
+use irad::config;
+use irad::frame::Pipeline;
+use irad::gpu::Gpu;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
 
 fn main() -> anyhow::Result<()> {
+    irad::gpu::quiet_mesa_runtime_dir();
     let a: Vec<String> = std::env::args().collect();
+    if a.len() != 4 {
+        anyhow::bail!("usage: twin SCENE FRAME OUTDIR");
+    }
     let (w, h) = (192, 192);
     let scene = builtin::load_any(&a[1])?;
     let f: u32 = a[2].parse()?;
     let out = std::path::Path::new(&a[3]);
     std::fs::create_dir_all(out)?;
-    let cfg = RendererConfig {
+    let mut cfg = config::Render::default();
+    cfg.sequence.size = config::Size {
         width: w,
         height: h,
-        max_vpls: 256,
-        ism_size: 64,
-        points_per_vpl: 4096,
-        num_points: 1 << 16,
-        pull_levels: 3,
-        ism_bias: 1.5,
-        light_samples: 32,
-        shadow_size: 256,
-        shadow_bias: 1.5,
-        exposure: 1.0,
-        seed: 1,
     };
-    let settings = Settings {
-        sampler: irad::vpl::sampler::SamplerParams {
-            kind: SamplerKind::Uniform,
-            slots: 256,
-            candidates: 1024,
-            camera_points: 256,
-            eps: 0.05,
-            mh_rate: 1.0,
-            mh_escape: 0,
-            dmin: 0.2,
-            seed: 1,
-            width: w,
-            height: h,
-        },
-        fps: 24.0,
-    };
-    let mut p = Pipeline::new(scene.clone(), settings, cfg, BackendChoice::Auto)?;
+    cfg.sampler.candidates = Some(1024);
+    cfg.sampler.mh_escape = 0;
+    cfg.clamp = Some(0.2);
+    let gpu = std::sync::Arc::new(Gpu::new(cfg.backend)?);
+    let mut p = Pipeline::new(gpu, scene.clone(), &cfg)?;
     let o = p.render_frame(f, true)?;
     let frame = scene.at(f as f32 / 24.0);
     let tr = Tracer::new(&frame);

@@ -1,132 +1,87 @@
-//! Argument types shared by the commands: frame ranges, image sizes, and the scene options.
+//! `irad`'s command line: clap over the library's settings ([`crate::config`]). Every flag is
+//! a field of a config type, whose `Default` supplies the help's defaults; this module only
+//! names the subcommands and hands each its settings.
 
-use anyhow::{bail, Result};
-use clap::Args;
+use crate::config;
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
 
-/// A half-open frame range `A..B`, or a single frame `N`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Frames {
-    pub start: u32,
-    pub end: u32,
+/// irad: instant radiosity with temporally coherent virtual point lights.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
 }
 
-impl Frames {
-    pub fn iter(&self) -> std::ops::Range<u32> {
-        self.start..self.end
-    }
-    pub fn len(&self) -> u32 {
-        self.end - self.start
-    }
-    pub fn is_empty(&self) -> bool {
-        self.end <= self.start
-    }
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render frames on the GPU by instant radiosity (frames, preview.gif, run.json)
+    Render(config::Render),
+    /// Path-trace the ground truth (CPU, next-event estimation with MIS)
+    Reference(config::Reference),
+    /// Samplers x VPL counts on one animation against a cached reference: metrics, charts, report.html
+    Compare(config::Compare),
+    /// Time whole frames per stage (CPU stages and GPU passes) for several VPL counts and sizes
+    Bench(config::Bench),
+    /// Error and flicker of an image sequence (folder of frame_FFFF.exr/.png) against a reference
+    Metrics {
+        /// Folder of test frames
+        test: PathBuf,
+        /// Folder of reference frames
+        reference: PathBuf,
+        /// Where metrics.json and metrics.csv go [default: the test folder]
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Print the graphics adapters found and the one irad chooses
+    Info {
+        #[arg(long, value_enum, default_value_t = config::Render::default().backend)]
+        backend: crate::gpu::BackendChoice,
+    },
+    /// List the built-in scenes and what each stresses, or inspect one scene
+    Scenes {
+        /// A built-in scene name or a .gltf/.glb path: print its triangles, emitters and their
+        /// power, cameras, animation, bounds and the loader's warnings
+        scene: Option<String>,
+        /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
+        #[arg(long)]
+        generate: Option<PathBuf>,
+    },
 }
 
-impl std::str::FromStr for Frames {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let num = |x: &str| {
-            x.trim().parse::<u32>().map_err(|_| {
-                format!("'{s}' is not a frame range: use A..B (half-open, 0..24 is 24 frames) or N")
-            })
-        };
-        let (start, end) = match s.split_once("..") {
-            Some((a, b)) => (num(a)?, num(b)?),
-            None => {
-                let n = num(s)?;
-                (n, n + 1)
-            }
-        };
-        if end <= start {
-            return Err(format!(
-                "frame range '{s}' is empty (A..B renders frames A to B-1)"
-            ));
-        }
-        if end - start > 100_000 {
-            return Err(format!("frame range '{s}' has more than 100000 frames"));
-        }
-        Ok(Frames { start, end })
-    }
-}
-
-/// An image size `WxH`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Size {
-    pub width: u32,
-    pub height: u32,
-}
-
-/// The largest width or height any command accepts.
-pub const MAX_SIZE: u32 = 8192;
-
-impl std::str::FromStr for Size {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("'{s}' is not an image size: use WxH, e.g. 256x256");
-        let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-        let (width, height) = (
-            w.trim().parse::<u32>().map_err(|_| bad())?,
-            h.trim().parse::<u32>().map_err(|_| bad())?,
-        );
-        if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
-            return Err(format!(
-                "image size {s} is out of range: each side must be 1 to {MAX_SIZE}"
-            ));
-        }
-        Ok(Size { width, height })
-    }
-}
-
-impl std::fmt::Display for Size {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}x{}", self.width, self.height)
-    }
-}
-
-/// Options every rendering command shares.
-#[derive(Args, Clone, Debug)]
-pub struct SceneOpts {
-    /// A built-in scene name (see `irad scenes`) or a .gltf/.glb path
-    pub scene: Option<String>,
-    /// Image size WxH
-    #[arg(long, default_value = "256x256")]
-    pub size: Size,
-    /// Frames: A..B (half-open) or a single frame N; frame f is at time f / fps
-    /// [default: render: the whole animation; others: 0]
-    #[arg(long)]
-    pub frames: Option<Frames>,
-    /// Frames per second of the animation
-    #[arg(long, default_value_t = 24.0)]
-    pub fps: f32,
-    /// Random seed; the same seed gives the same frames
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-}
-
-impl SceneOpts {
+impl Command {
+    /// Checks the command's settings (what `run` does first).
     pub fn validate(&self) -> Result<()> {
-        if !(self.fps.is_finite() && self.fps > 0.0 && self.fps <= 1000.0) {
-            bail!("--fps {} is out of range (0 to 1000)", self.fps);
+        match self {
+            Command::Render(c) => c.validate(),
+            Command::Reference(c) => c.validate(),
+            Command::Compare(c) => c.validate(),
+            Command::Bench(c) => c.validate(),
+            Command::Metrics { .. } | Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
-        Ok(())
     }
-    /// The scene named, or the command's default.
-    pub fn scene_or<'a>(&'a self, default: &'a str) -> &'a str {
-        self.scene.as_deref().unwrap_or(default)
-    }
-    /// The frames named, or all frames of an animation of `duration` seconds (at least one).
-    pub fn frames_or_all(&self, duration: f32) -> Frames {
-        self.frames.unwrap_or(Frames {
-            start: 0,
-            end: ((duration * self.fps).round() as u32).max(1),
-        })
-    }
-    /// The frames named, or frame 0.
-    pub fn frames_or_first(&self) -> Frames {
-        self.frames.unwrap_or(Frames { start: 0, end: 1 })
-    }
-    pub fn time(&self, f: u32) -> f32 {
-        f as f32 / self.fps
+}
+
+/// Runs a parsed command line.
+pub fn run(cli: Cli) -> Result<()> {
+    use crate::commands;
+    cli.command.validate()?;
+    match cli.command {
+        Command::Render(c) => commands::render::render(&c).map(|_| ()),
+        Command::Reference(c) => commands::reference::reference(&c).map(|_| ()),
+        Command::Compare(c) => commands::compare::compare(&c),
+        Command::Bench(c) => commands::bench::bench(&c),
+        Command::Metrics {
+            test,
+            reference,
+            out,
+        } => commands::metrics::metrics(&test, &reference, out.as_deref()).map(|_| ()),
+        Command::Info { backend } => commands::info(backend),
+        Command::Scenes { scene, generate } => {
+            commands::scenes(scene.as_deref(), generate.as_deref())
+        }
     }
 }
 
@@ -134,21 +89,127 @@ impl SceneOpts {
 mod tests {
     use super::*;
 
+    fn parse(args: &[&str]) -> Result<Command, String> {
+        let mut argv = vec!["irad"];
+        argv.extend_from_slice(args);
+        Cli::try_parse_from(argv)
+            .map(|c| c.command)
+            .map_err(|e| e.to_string())
+    }
+
+    /// The error for `args`, from clap's parse or from validate().
+    fn error(args: &[&str]) -> String {
+        match parse(args) {
+            Err(e) => e,
+            Ok(c) => match c.validate() {
+                Err(e) => format!("{e:#}"),
+                Ok(()) => panic!("irad {} was accepted", args.join(" ")),
+            },
+        }
+    }
+
     #[test]
-    fn frames_and_sizes_parse_as_documented() {
-        assert_eq!("0..24".parse::<Frames>().unwrap().len(), 24);
-        assert_eq!("7".parse::<Frames>().unwrap(), Frames { start: 7, end: 8 });
-        assert!("5..5".parse::<Frames>().unwrap_err().contains("empty"));
-        assert!("a..b".parse::<Frames>().is_err());
-        assert_eq!(
-            "256x128".parse::<Size>().unwrap(),
-            Size {
-                width: 256,
-                height: 128
+    fn the_help_defaults_are_the_library_defaults() {
+        let Command::Render(r) = parse(&["render"]).unwrap() else {
+            panic!()
+        };
+        let d = config::Render::default();
+        assert_eq!(r.vpls, d.vpls);
+        assert_eq!(r.sequence.size, d.sequence.size);
+        assert_eq!(r.quality.ism_size, d.quality.ism_size);
+        assert_eq!(r.sampler.mh_escape, d.sampler.mh_escape);
+        assert_eq!(r.out, d.out);
+        let Command::Compare(c) = parse(&["compare"]).unwrap() else {
+            panic!()
+        };
+        assert_eq!(c.vpls, config::Compare::default().vpls);
+        assert_eq!(c.samplers, config::Compare::default().samplers);
+        let Command::Bench(b) = parse(&["bench"]).unwrap() else {
+            panic!()
+        };
+        assert_eq!(b.cases, config::Bench::default().cases);
+        assert_eq!(b.render.out, config::Bench::default().render.out);
+    }
+
+    /// Every numeric flag of every command, given NaN, infinity, a negative number and a value
+    /// past its range, is refused with a message that names the flag.
+    #[test]
+    fn every_numeric_flag_is_checked_and_named() {
+        let floats = [
+            ("render", "--fps"),
+            ("render", "--clamp"),
+            ("render", "--eps"),
+            ("render", "--mh-rate"),
+            ("render", "--ism-bias"),
+            ("render", "--exposure"),
+            ("reference", "--fps"),
+            ("reference", "--exposure"),
+            ("compare", "--fps"),
+            ("compare", "--clamp"),
+            ("compare", "--eps"),
+            ("compare", "--mh-rate"),
+            ("compare", "--ism-bias"),
+            ("compare", "--exposure"),
+            ("bench", "--fps"),
+            ("bench", "--exposure"),
+            ("bench", "--mh-rate"),
+            ("bench", "--ism-bias"),
+        ];
+        for (cmd, flag) in floats {
+            for bad in ["nan", "inf", "-inf", "-1", "1e30"] {
+                let e = error(&[cmd, flag, bad]);
+                assert!(e.contains(flag), "irad {cmd} {flag} {bad}: {e}");
+                assert!(!e.contains("-- -1"), "clap's tip instead of a check: {e}");
             }
+        }
+        let ints = [
+            ("render", "--vpls", "0", "70000"),
+            ("render", "--candidates", "0", "99999999"),
+            ("render", "--camera-points", "0", "99999999"),
+            ("render", "--mh-escape", "", "100000"),
+            ("render", "--ism-size", "48", "4096"),
+            ("render", "--ism-points", "0", "99999999"),
+            ("render", "--pull-levels", "", "100"),
+            ("render", "--light-samples", "0", "100000"),
+            ("render", "--shadow-size", "4", "100000"),
+            ("reference", "--spp", "0", "99999999"),
+            ("compare", "--vpls", "0", "70000"),
+            ("compare", "--spp", "0", "99999999"),
+            ("compare", "--show-vpls", "7", "70000"),
+            ("compare", "--camera-points", "0", "99999999"),
+            ("compare", "--pull-levels", "", "100"),
+            ("bench", "--repeat", "0", "99999"),
+            ("bench", "--light-samples", "0", "100000"),
+        ];
+        for (cmd, flag, low, high) in ints {
+            for bad in [low, high, "-1", "nan", "1.5"] {
+                if bad.is_empty() {
+                    continue;
+                }
+                let e = error(&[cmd, flag, bad]);
+                assert!(e.contains(flag), "irad {cmd} {flag} {bad}: {e}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_failures_the_review_found_are_refused_for_the_right_reason() {
+        assert!(error(&["reference", "--exposure", "nan"]).contains("--exposure NaN"));
+        assert!(error(&["render", "--ism-bias", "nan"]).contains("--ism-bias NaN"));
+        let e = error(&["render", "--pull-levels", "100"]);
+        assert!(
+            e.contains("--pull-levels 100") && e.contains("0 to 6"),
+            "{e}"
         );
-        assert!("0x10".parse::<Size>().unwrap_err().contains("out of range"));
-        assert!("100000x10".parse::<Size>().is_err());
-        assert!("256".parse::<Size>().is_err());
+        let e = error(&["render", "--vpls", "0"]);
+        assert!(e.starts_with("--vpls 0"), "{e}");
+        let e = error(&["render", "--frames", "4294967295"]);
+        assert!(e.contains("past the last frame"), "{e}");
+        let e = error(&["render", "--clamp", "-1"]);
+        assert!(e.contains("--clamp -1 is out of range"), "{e}");
+        let e = error(&["bench", "--configs", "0@64x64"]);
+        assert!(e.starts_with("--vpls 0"), "{e}");
+        let e = error(&["compare", "--samplers", "cdf", "--vpls", "4,0"]);
+        assert!(e.starts_with("--vpls 0"), "{e}");
     }
 }

@@ -1,21 +1,14 @@
 //! One frame, in order (DESIGN.md "One frame, in order"): the whole flow in [`Pipeline::render_frame`].
 
-use crate::gpu::{BackendChoice, Gpu, GpuFrame, RenderedFrame, Renderer, RendererConfig};
+use crate::config;
+use crate::gpu::{Gpu, GpuFrame, RenderedImage, Renderer};
 use crate::scene::Scene;
 use crate::trace::Tracer;
 pub use crate::vpl::sampler::SamplerKind;
 use crate::vpl::sampler::{Sampler, SamplerParams, Selection};
 use anyhow::Result;
-use serde::Serialize;
+use std::sync::Arc;
 use std::time::Instant;
-
-/// What a sequence is rendered with, besides the GPU sizes: the sampler (which also holds
-/// the seed and the distance clamp) and the frame rate.
-#[derive(Clone, Debug, Serialize)]
-pub struct Settings {
-    pub sampler: SamplerParams,
-    pub fps: f32,
-}
 
 /// Records the seconds since `t` as stage `name` and restarts `t`.
 fn lap(stages: &mut Vec<(&'static str, f64)>, name: &'static str, t: &mut Instant) {
@@ -23,56 +16,57 @@ fn lap(stages: &mut Vec<(&'static str, f64)>, name: &'static str, t: &mut Instan
     *t = Instant::now();
 }
 
-/// A rendered frame with its record.
+/// What rendering frame index `index` gave: the image and the frame's record.
 pub struct FrameOutput {
     pub index: u32,
     pub time: f32,
-    pub image: RenderedFrame,
+    pub image: RenderedImage,
     pub selection: Selection,
     /// Seconds per stage, CPU stages then GPU passes, in order.
     pub stages: Vec<(&'static str, f64)>,
     pub seconds: f64,
 }
 
-/// The renderer of one sequence: scene, ray tracer, sampler state and GPU passes.
+/// The renderer of one sequence: scene, ray tracer, sampler state and GPU passes, on a
+/// device it shares with the process's other pipelines.
 pub struct Pipeline {
     pub scene: Scene,
-    pub settings: Settings,
+    /// The sampler's parameters (seed, distance clamp, sizes) for this scene.
+    pub params: SamplerParams,
+    pub fps: f32,
     pub renderer: Renderer,
     tracer: Tracer,
     sampler: Sampler,
 }
 
 impl Pipeline {
-    pub fn new(
-        scene: Scene,
-        settings: Settings,
-        config: RendererConfig,
-        backend: BackendChoice,
-    ) -> Result<Pipeline> {
-        let gpu = Gpu::new(backend)?;
+    /// Checks `cfg` (against the adapter too) and builds the pipeline for `scene` on `gpu`.
+    pub fn new(gpu: Arc<Gpu>, scene: Scene, cfg: &config::Render) -> Result<Pipeline> {
+        cfg.validate()?;
         let frame0 = scene.at(0.0);
-        let renderer = Renderer::new(gpu, config, &frame0)?;
+        let renderer = Renderer::new(gpu, cfg.renderer_config(), &frame0)?;
         let tracer = Tracer::new(&frame0);
-        let sampler = Sampler::new(settings.sampler.clone());
+        let params = cfg.sampler_params(&scene);
+        let sampler = Sampler::new(params.clone());
         Ok(Pipeline {
             scene,
-            settings,
+            params,
+            fps: cfg.sequence.fps,
             renderer,
             tracer,
             sampler,
         })
     }
 
-    /// Renders frame `f` (at time f / fps). With `components`, the direct and indirect
-    /// images come back too.
+    /// Renders frame index `f` (the scene at time f / fps). With `components`, the direct and
+    /// indirect images come back too.
     pub fn render_frame(&mut self, f: u32, components: bool) -> Result<FrameOutput> {
-        let s = &self.settings.sampler;
+        let s = &self.params;
         let start = Instant::now();
         let mut stages = Vec::new();
         let mut t = Instant::now();
         // 1. The scene at time t.
-        let frame = self.scene.at(f as f32 / self.settings.fps);
+        let frame = self.scene.at((f as f64 / self.fps as f64) as f32);
         lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
         self.tracer.update(&frame);

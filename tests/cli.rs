@@ -185,7 +185,10 @@ fn render_rejects_bad_arguments_before_rendering() {
         (&["--vpls", "0"], "out of range"),
         (&["--vpls", "40000"], "lower --vpls or --ism-size"),
         (&["--ism-size", "48"], "power of two"),
-        (&["--clamp=-1"], "must be a distance"),
+        (&["--clamp=-1"], "--clamp -1 is out of range"),
+        (&["--clamp", "-1"], "--clamp -1 is out of range"),
+        (&["--ism-bias", "nan"], "--ism-bias NaN"),
+        (&["--pull-levels", "100"], "--pull-levels 100"),
         (&["--fps", "0"], "--fps"),
     ];
     for (extra, msg) in cases {

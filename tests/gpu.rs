@@ -2,13 +2,13 @@
 //! (lavapipe through Vulkan and llvmpipe through GL).
 
 use glam::Vec3;
-use irad::frame::{Pipeline, SamplerKind, Settings};
-use irad::gpu::{adapters, BackendChoice, RendererConfig};
+use irad::config;
+use irad::frame::Pipeline;
+use irad::gpu::{adapters, BackendChoice};
 use irad::image::Hdr;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
-use irad::vpl::sampler::SamplerParams;
 
 /// The backends to test: every one of Vulkan and GL that has a usable adapter here.
 fn backends() -> Vec<BackendChoice> {
@@ -23,43 +23,28 @@ fn backends() -> Vec<BackendChoice> {
     found
 }
 
-fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> RendererConfig {
-    RendererConfig {
+/// Render settings at `w` x `h` with `vpls` VPLs and `light_samples` emitter samples (the
+/// defaults otherwise: 64^2 ISM tiles, 4096 points a VPL, 3 pull-push levels).
+fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
+    let mut c = config::Render::default();
+    c.sequence.size = config::Size {
         width: w,
         height: h,
-        max_vpls: vpls,
-        ism_size: 64,
-        points_per_vpl: 4096,
-        num_points: 1 << 16,
-        pull_levels: 3,
-        ism_bias: 1.5,
-        light_samples,
-        shadow_size: 256,
-        shadow_bias: 1.5,
-        exposure: 1.0,
-        seed: 1,
-    }
+    };
+    c.vpls = vpls;
+    c.quality.light_samples = light_samples;
+    c.sampler.camera_points = 64;
+    c.sampler.mh_escape = 0;
+    c
 }
 
-fn pipeline(scene: &str, cfg: RendererConfig, dmin: f32, backend: BackendChoice) -> Pipeline {
+/// A pipeline for a built-in scene with distance clamp `dmin`, on its own device.
+fn pipeline(scene: &str, mut cfg: config::Render, dmin: f32, backend: BackendChoice) -> Pipeline {
     let scene = builtin::load(scene).unwrap().unwrap();
-    let settings = Settings {
-        sampler: SamplerParams {
-            kind: SamplerKind::Uniform,
-            slots: cfg.max_vpls as usize,
-            candidates: cfg.max_vpls as usize * 4,
-            camera_points: 64,
-            eps: 0.05,
-            mh_rate: 1.0,
-            mh_escape: 0,
-            dmin,
-            seed: 1,
-            width: cfg.width,
-            height: cfg.height,
-        },
-        fps: 24.0,
-    };
-    Pipeline::new(scene, settings, cfg, backend).unwrap()
+    cfg.clamp = Some(dmin);
+    cfg.backend = backend;
+    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
+    Pipeline::new(gpu, scene, &cfg).unwrap()
 }
 
 /// Mean over pixels of |a - b| / (mean luminance of b), luminance; writes both images and

@@ -13,7 +13,7 @@ pub mod shadow;
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
-pub use renderer::{GpuFrame, RenderedFrame, Renderer, RendererConfig};
+pub use renderer::{GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.
 pub const COMMON_WGSL: &str = include_str!("../../shaders/common.wgsl");
@@ -125,9 +125,48 @@ fn usable(a: &wgpu::Adapter) -> bool {
         && a.limits().max_compute_workgroup_size_x >= 64
 }
 
+thread_local! {
+    static DEVICES_OPENED: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// How many devices this thread has opened with [`Gpu::new`] (a command opens one and lends
+/// it to every pipeline; tests count with this).
+pub fn devices_opened() -> u64 {
+    DEVICES_OPENED.with(|c| c.get())
+}
+
+/// Mesa's EGL and Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" on machines
+/// without a desktop session, which reads like an error of irad's. Where the variable is unset
+/// or not a folder, point it at a private folder under the temporary directory. Call it at
+/// the start of `main`, before any thread starts (it sets an environment variable).
+pub fn quiet_mesa_runtime_dir() {
+    let ok = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(|d| std::path::Path::new(&d).is_dir())
+        .unwrap_or(false);
+    if ok {
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("irad-runtime-{}", std::process::id()));
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::DirBuilderExt;
+        let _ = std::fs::DirBuilder::new()
+            .recursive(true)
+            .mode(0o700)
+            .create(&dir);
+    }
+    #[cfg(not(unix))]
+    let _ = std::fs::create_dir_all(&dir);
+    if dir.is_dir() {
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
 impl Gpu {
-    /// Opens the preferred usable adapter for `choice`.
+    /// Opens the preferred usable adapter for `choice`. A process opens one and shares it
+    /// (`Arc<Gpu>`) with every pipeline.
     pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        DEVICES_OPENED.with(|c| c.set(c.get() + 1));
         let inst = instance(choice.backends());
         let mut list = pollster::block_on(inst.enumerate_adapters(choice.backends()));
         list.sort_by_key(|a| rank(&a.get_info()));
@@ -280,7 +319,7 @@ pub(crate) fn texture_entry(
 }
 
 impl Gpu {
-    pub(crate) fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    pub fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: size.max(16).next_multiple_of(16),

@@ -93,8 +93,9 @@ pub struct GpuFrame<'a> {
     pub dmin: f32,
 }
 
-/// A rendered frame: linear HDR, the 8-bit preview, optionally its components, and timings.
-pub struct RenderedFrame {
+/// A frame's rendered image: linear HDR, the 8-bit preview, optionally its components, and
+/// timings.
+pub struct RenderedImage {
     pub hdr: Hdr,
     pub ldr: Vec<u8>,
     pub direct: Option<Hdr>,
@@ -104,7 +105,7 @@ pub struct RenderedFrame {
 }
 
 pub struct Renderer {
-    pub gpu: Gpu,
+    pub gpu: std::sync::Arc<Gpu>,
     pub config: RendererConfig,
     tri_count: usize,
     params: wgpu::Buffer,
@@ -173,7 +174,11 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
 impl Renderer {
     /// Builds every pass for frames of `tri_count` triangles; `points_frame` places the ISM
     /// point set (by area) once.
-    pub fn new(gpu: Gpu, config: RendererConfig, points_frame: &Frame) -> Result<Renderer> {
+    pub fn new(
+        gpu: std::sync::Arc<Gpu>,
+        config: RendererConfig,
+        points_frame: &Frame,
+    ) -> Result<Renderer> {
         check_config(&config, &gpu.limits)?;
         let c = &config;
         let tri_count = points_frame.tris.len();
@@ -348,7 +353,7 @@ impl Renderer {
     }
 
     /// Renders one frame. With `components`, the direct and indirect images come back too.
-    pub fn render(&mut self, input: &GpuFrame, components: bool) -> Result<RenderedFrame> {
+    pub fn render(&mut self, input: &GpuFrame, components: bool) -> Result<RenderedImage> {
         let f = input.frame;
         let c = self.config.clone();
         let (lo, hi) = f.bounds();
@@ -448,7 +453,7 @@ impl Renderer {
             (None, None)
         };
         stage("readback", &self.gpu, None)?;
-        Ok(RenderedFrame {
+        Ok(RenderedImage {
             hdr,
             ldr,
             direct,

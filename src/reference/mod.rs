@@ -13,9 +13,9 @@ use rand::Rng;
 use rayon::prelude::*;
 use std::f32::consts::PI;
 
-/// Settings of one reference image.
+/// Parameters of one reference image.
 #[derive(Clone, Copy, Debug)]
-pub struct Settings {
+pub struct Params {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
@@ -24,7 +24,7 @@ pub struct Settings {
 
 /// Renders one frame. Each pixel is the box-filtered mean radiance over its
 /// area; `on_row` is called once per finished row (for progress bars).
-pub fn render(frame: &Frame, tracer: &Tracer, s: &Settings, on_row: &(dyn Fn() + Sync)) -> Hdr {
+pub fn render(frame: &Frame, tracer: &Tracer, s: &Params, on_row: &(dyn Fn() + Sync)) -> Hdr {
     let mut img = Hdr::new(s.width, s.height);
     img.data
         .par_chunks_mut(s.width as usize)
@@ -129,7 +129,7 @@ mod tests {
         let scene = builtin::load("furnace").unwrap().unwrap();
         let f = scene.at(0.0);
         let tr = Tracer::new(&f);
-        let s = Settings {
+        let s = Params {
             width: 8,
             height: 8,
             spp: 4096,
@@ -155,7 +155,7 @@ mod tests {
         let scene = builtin::load("cornell").unwrap().unwrap();
         let f = scene.at(0.0);
         let tr = Tracer::new(&f);
-        let s = Settings {
+        let s = Params {
             width: 8,
             height: 8,
             spp: 4,

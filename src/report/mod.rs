@@ -1,7 +1,6 @@
 //! Stage 8: output. Frame files, progress bars, and the run record (`run.json`).
 
 pub mod charts;
-pub mod compare;
 pub mod html;
 
 use anyhow::{Context, Result};
@@ -56,16 +55,210 @@ pub fn progress(len: u64, what: &str) -> ProgressBar {
 
 /// Writes an animated GIF of 8-bit RGB frames at `fps`.
 pub fn write_gif(path: &Path, frames: &[image::RgbImage], fps: f32) -> Result<()> {
-    use image::codecs::gif::{GifEncoder, Repeat};
-    crate::image::atomic_write(path, |tmp| {
-        let file = std::fs::File::create(tmp)?;
+    let mut gif = GifStream::create(path, fps)?;
+    for f in frames {
+        gif.push(f)?;
+    }
+    gif.finish()
+}
+
+/// An animated GIF written frame by frame, so a long render holds no frames in memory. It
+/// is written to a temporary name and moved into place by [`GifStream::finish`]; dropped
+/// unfinished, it leaves nothing behind.
+pub struct GifStream {
+    path: std::path::PathBuf,
+    tmp: std::path::PathBuf,
+    encoder: Option<image::codecs::gif::GifEncoder<std::io::BufWriter<std::fs::File>>>,
+    /// The same file, to sync once the encoder has written the trailer and been dropped.
+    file: std::fs::File,
+    delay: image::Delay,
+}
+
+impl GifStream {
+    pub fn create(path: &Path, fps: f32) -> Result<GifStream> {
+        use image::codecs::gif::{GifEncoder, Repeat};
+        let tmp = path.with_file_name(format!(
+            ".{}.tmp-{}.gif",
+            path.file_name().unwrap_or_default().to_string_lossy(),
+            std::process::id()
+        ));
+        let file = std::fs::File::create(&tmp)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        let same = file.try_clone()?;
         let mut enc = GifEncoder::new_with_speed(std::io::BufWriter::new(file), 10);
         enc.set_repeat(Repeat::Infinite)?;
-        let delay = image::Delay::from_numer_denom_ms(1000, fps.max(1.0) as u32);
-        for f in frames {
-            let rgba = image::DynamicImage::ImageRgb8(f.clone()).to_rgba8();
-            enc.encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))?;
+        Ok(GifStream {
+            path: path.to_path_buf(),
+            tmp,
+            encoder: Some(enc),
+            file: same,
+            delay: image::Delay::from_numer_denom_ms(1000, fps.round().max(1.0) as u32),
+        })
+    }
+
+    /// Appends one frame.
+    pub fn push(&mut self, frame: &image::RgbImage) -> Result<()> {
+        let rgba = image::DynamicImage::ImageRgb8(frame.clone()).to_rgba8();
+        self.encoder
+            .as_mut()
+            .expect("present until finish")
+            .encode_frame(image::Frame::from_parts(rgba, 0, 0, self.delay))
+            .with_context(|| format!("{}: cannot write", self.path.display()))
+    }
+
+    /// Flushes the file and moves it into place.
+    pub fn finish(mut self) -> Result<()> {
+        // Dropping the encoder writes the GIF trailer and flushes the buffer.
+        drop(self.encoder.take());
+        self.file
+            .sync_all()
+            .with_context(|| format!("{}: cannot write", self.path.display()))?;
+        std::fs::rename(&self.tmp, &self.path)
+            .with_context(|| format!("{}: cannot move into place", self.path.display()))
+    }
+}
+
+impl Drop for GifStream {
+    fn drop(&mut self) {
+        if self.encoder.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
         }
-        Ok(())
-    })
+    }
+}
+
+/// Whether `name` is one of the files `irad render` or `irad reference` writes into its
+/// output folder: `frame_FFFF.exr|png`, `frame_FFFF_direct|indirect.exr|png`, `preview.gif`,
+/// `run.json`, `frames.jsonl`.
+pub fn is_run_output(name: &str) -> bool {
+    if matches!(name, "preview.gif" | "run.json" | "frames.jsonl") {
+        return true;
+    }
+    let Some(stem) = name
+        .strip_suffix(".exr")
+        .or_else(|| name.strip_suffix(".png"))
+    else {
+        return false;
+    };
+    let Some(rest) = stem.strip_prefix("frame_") else {
+        return false;
+    };
+    let digits = rest
+        .strip_suffix("_direct")
+        .or_else(|| rest.strip_suffix("_indirect"))
+        .unwrap_or(rest);
+    digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit())
+}
+
+/// Removes the files an earlier run wrote into `dir` (see [`is_run_output`]), so a new run's
+/// frames are never mixed with an old run's; other files are left alone. Returns how many
+/// were removed.
+pub fn remove_earlier_run(dir: &Path) -> Result<usize> {
+    let mut removed = 0;
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(e).with_context(|| format!("{}: cannot list", dir.display())),
+    };
+    for entry in entries {
+        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
+        let name = entry.file_name();
+        if is_run_output(&name.to_string_lossy()) && entry.path().is_file() {
+            std::fs::remove_file(entry.path()).with_context(|| {
+                format!(
+                    "{}: cannot remove an earlier run's file",
+                    entry.path().display()
+                )
+            })?;
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
+/// Prepares an output folder for a run that writes frames: creates it, checks it is
+/// writable, and removes an earlier run's frame files, saying so on stderr.
+pub fn prepare_run_dir(dir: &Path) -> Result<()> {
+    prepare_out_dir(dir)?;
+    let n = remove_earlier_run(dir)?;
+    if n > 0 {
+        eprintln!(
+            "note: removed {n} files of an earlier run from {} (frame_*.exr|png, preview.gif, run.json, frames.jsonl)",
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Appends one JSON record a line to `path` (JSON Lines): a long run's per-frame records are
+/// written as they come, never rewritten.
+pub struct JsonLines {
+    file: std::io::BufWriter<std::fs::File>,
+    path: std::path::PathBuf,
+}
+
+impl JsonLines {
+    pub fn create(path: &Path) -> Result<JsonLines> {
+        let file = std::fs::File::create(path)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        Ok(JsonLines {
+            file: std::io::BufWriter::new(file),
+            path: path.to_path_buf(),
+        })
+    }
+
+    pub fn push(&mut self, value: &impl Serialize) -> Result<()> {
+        use std::io::Write;
+        serde_json::to_writer(&mut self.file, value)
+            .map_err(anyhow::Error::from)
+            .and_then(|_| Ok(self.file.write_all(b"\n")?))
+            .and_then(|_| Ok(self.file.flush()?))
+            .with_context(|| format!("{}: cannot write", self.path.display()))
+    }
+}
+
+/// The resident memory of this process in bytes (Linux; None elsewhere).
+pub fn resident_bytes() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4096)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_irads_own_run_files_count_as_an_earlier_run() {
+        for yes in [
+            "frame_0000.exr",
+            "frame_0012.png",
+            "frame_12345.exr",
+            "frame_0003_direct.png",
+            "frame_0003_indirect.exr",
+            "preview.gif",
+            "run.json",
+            "frames.jsonl",
+        ] {
+            assert!(is_run_output(yes), "{yes}");
+        }
+        for no in [
+            "frame_12.exr",
+            "frame_0001.jpg",
+            "frame_abcd.png",
+            "frame_0001_other.png",
+            "notes.txt",
+            "myframe_0001.png",
+            "metrics.json",
+        ] {
+            assert!(!is_run_output(no), "{no}");
+        }
+        let dir = std::env::temp_dir().join(format!("irad-stale-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        for n in ["frame_0000.png", "frame_0001.exr", "keep.txt"] {
+            std::fs::write(dir.join(n), b"x").unwrap();
+        }
+        assert_eq!(remove_earlier_run(&dir).unwrap(), 2);
+        assert!(dir.join("keep.txt").exists() && !dir.join("frame_0000.png").exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

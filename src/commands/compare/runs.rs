@@ -1,0 +1,104 @@
+//! Every sampler x VPL count of a comparison, rendered on the plan's device and measured
+//! against the reference.
+
+use super::plan::{label, Plan};
+use crate::frame::Pipeline;
+use crate::image::Hdr;
+use crate::metrics::{self, SequenceMetrics};
+use crate::vpl::sampler::SamplerKind;
+use anyhow::Result;
+use serde::Serialize;
+
+/// One run's measurements.
+#[derive(Serialize)]
+pub struct RunRecord {
+    pub sampler: SamplerKind,
+    pub vpls: u32,
+    pub mean_seconds: f64,
+    /// Mean fraction of slots replaced, from the second frame on (the first fills them all).
+    pub mean_replaced: f64,
+    pub mean_acceptance: Option<f64>,
+    pub metrics: SequenceMetrics,
+    pub seconds: Vec<f64>,
+    pub replaced: Vec<f32>,
+    pub acceptance: Vec<Option<f32>>,
+}
+
+impl RunRecord {
+    pub fn label(&self) -> String {
+        label(self.sampler, self.vpls)
+    }
+}
+
+/// What the runs give: their records, and the frames of the runs the report shows.
+pub struct Results {
+    pub records: Vec<RunRecord>,
+    /// (label, HDR frames) of the runs at the shown VPL count.
+    pub shown: Vec<(String, Vec<Hdr>)>,
+    pub adapter: String,
+}
+
+fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
+    let (n, s) = xs.fold((0usize, 0.0), |(n, s), x| (n + 1, s + x));
+    (n > 0).then(|| s / n as f64)
+}
+
+/// Renders one run's frames and measures them.
+fn run(
+    plan: &Plan,
+    reference: &[Hdr],
+    sampler: SamplerKind,
+    vpls: u32,
+    tick: &dyn Fn(),
+) -> Result<(RunRecord, Vec<Hdr>)> {
+    let cfg = plan.cfg.run(sampler, vpls);
+    let mut p = Pipeline::new(plan.gpu.clone(), plan.scene.clone(), &cfg)?;
+    let (mut imgs, mut seconds, mut replaced, mut acceptance) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for &f in &plan.numbers {
+        let fo = p.render_frame(f, false)?;
+        seconds.push(fo.seconds);
+        replaced.push(fo.selection.replaced);
+        acceptance.push(fo.selection.acceptance);
+        imgs.push(fo.image.hdr);
+        tick();
+    }
+    let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
+    let record = RunRecord {
+        sampler,
+        vpls,
+        mean_seconds: mean(seconds.iter().copied()).unwrap_or(0.0),
+        mean_replaced: mean(replaced.iter().skip(1).map(|&x| x as f64)).unwrap_or(1.0),
+        mean_acceptance: mean(
+            acceptance
+                .iter()
+                .skip(1)
+                .filter_map(|a| a.map(|x| x as f64)),
+        ),
+        metrics,
+        seconds,
+        replaced,
+        acceptance,
+    };
+    Ok((record, imgs))
+}
+
+/// Every sampler x VPL count, in order.
+pub fn run_all(plan: &Plan, reference: &[Hdr], tick: &dyn Fn()) -> Result<Results> {
+    let show = plan.cfg.shown_vpls();
+    let mut results = Results {
+        records: Vec::new(),
+        shown: Vec::new(),
+        adapter: plan.gpu.adapter.to_string(),
+    };
+    for &s in &plan.cfg.samplers {
+        for &v in &plan.cfg.vpls {
+            let (record, imgs) = run(plan, reference, s, v, tick)?;
+            if v == show {
+                results.shown.push((record.label(), imgs));
+            }
+            results.records.push(record);
+        }
+    }
+    Ok(results)
+}

@@ -1,0 +1,62 @@
+//! `irad metrics TEST REFERENCE`: error and flicker of one image sequence against another.
+
+use crate::report;
+use anyhow::Result;
+use std::path::Path;
+
+/// Writes per-frame metrics as CSV.
+pub fn metrics_csv(m: &crate::metrics::SequenceMetrics) -> String {
+    let mut s = String::from("frame,rel_mse,rmse,bias,rel_bias,flicker,flicker_rms,flip\n");
+    for f in &m.frames {
+        let o = |x: Option<f64>| x.map(|v| format!("{v:.8}")).unwrap_or_default();
+        s += &format!(
+            "{},{:.8},{:.8},{:.8},{:.8},{},{},{:.6}\n",
+            f.frame,
+            f.error.rel_mse,
+            f.error.rmse,
+            f.error.bias,
+            f.error.rel_bias,
+            o(f.flicker),
+            o(f.flicker_rms),
+            f.flip
+        );
+    }
+    s
+}
+
+/// Error and flicker of one image sequence against another, printed and written.
+pub fn metrics(
+    test: &Path,
+    reference: &Path,
+    out: Option<&Path>,
+) -> Result<crate::metrics::SequenceMetrics> {
+    let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
+    let m = crate::metrics::sequence(&numbers, &t, &r)?;
+    println!(
+        "{:>6} {:>10} {:>10} {:>10} {:>10} {:>8}",
+        "frame", "relMSE", "RMSE", "bias", "flicker", "FLIP"
+    );
+    for f in &m.frames {
+        println!(
+            "{:>6} {:>10.5} {:>10.5} {:>+10.5} {:>10} {:>8.4}",
+            f.frame,
+            f.error.rel_mse,
+            f.error.rmse,
+            f.error.bias,
+            f.flicker
+                .map(|v| format!("{v:.5}"))
+                .unwrap_or_else(|| "-".into()),
+            f.flip
+        );
+    }
+    println!(
+        "mean relMSE {:.5}, RMSE {:.5}, bias {:+.5}, FLIP {:.4}; flicker F1 {:.5} (RMS {:.5}); temporal variance {:.3e}, temporal bias^2 {:.3e}",
+        m.mean_rel_mse, m.mean_rmse, m.mean_bias, m.mean_flip, m.flicker_f1, m.flicker_rms, m.temporal_variance, m.temporal_bias
+    );
+    let dir = out.unwrap_or(test);
+    report::prepare_out_dir(dir)?;
+    report::write_json(&dir.join("metrics.json"), &m)?;
+    crate::image::write_bytes(&dir.join("metrics.csv"), metrics_csv(&m).as_bytes())?;
+    println!("wrote {}/metrics.json and metrics.csv", dir.display());
+    Ok(m)
+}

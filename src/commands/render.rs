@@ -1,0 +1,215 @@
+//! `irad render`: a sequence's frames (EXR + PNG), an animated preview and the run record.
+//!
+//! Memory stays flat over long runs: each frame is written and streamed into the GIF as it
+//! comes, its record appended to `frames.jsonl`; `run.json` is written once at the end (the
+//! settings, the adapter, the summary, and the per-frame records read back from
+//! `frames.jsonl`).
+
+use super::load_scene;
+use crate::config;
+use crate::frame::{FrameOutput, Pipeline};
+use crate::gpu::{AdapterDesc, Gpu};
+use crate::report;
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::path::Path;
+use std::sync::Arc;
+
+/// One frame's record (a line of `frames.jsonl`, and an entry of `run.json`'s `frames`).
+#[derive(Serialize, serde::Deserialize)]
+pub struct FrameRecord {
+    pub frame: u32,
+    pub time: f32,
+    pub seconds: f64,
+    /// Seconds per stage (CPU stages and GPU passes)...
+    pub stages: std::collections::BTreeMap<String, f64>,
+    /// ...and the order they ran in.
+    pub stage_order: Vec<String>,
+    pub vpls: usize,
+    pub paths: u64,
+    pub replaced: f32,
+    pub acceptance: Option<f32>,
+    pub b: Option<f32>,
+    pub importance_seconds: f64,
+    pub mean_rgb: [f32; 3],
+    /// Resident memory of the process after the frame, in MiB (Linux).
+    pub rss_mib: Option<f64>,
+}
+
+impl FrameRecord {
+    pub fn of(fo: &FrameOutput) -> FrameRecord {
+        FrameRecord {
+            frame: fo.index,
+            time: fo.time,
+            seconds: fo.seconds,
+            stages: fo.stages.iter().map(|(n, t)| (n.to_string(), *t)).collect(),
+            stage_order: fo.stages.iter().map(|(n, _)| n.to_string()).collect(),
+            vpls: fo.selection.vpls.len(),
+            paths: fo.selection.paths,
+            replaced: fo.selection.replaced,
+            acceptance: fo.selection.acceptance,
+            b: fo.selection.b,
+            importance_seconds: fo.selection.importance_s,
+            mean_rgb: fo.image.hdr.mean().to_array(),
+            rss_mib: report::resident_bytes().map(|b| b as f64 / (1 << 20) as f64),
+        }
+    }
+}
+
+/// Mean seconds per stage over frames, in the first frame's order.
+#[derive(Default, Serialize)]
+pub struct StageMeans {
+    pub frames: u32,
+    pub seconds: f64,
+    pub stages: Vec<(String, f64)>,
+}
+
+impl StageMeans {
+    pub fn add(&mut self, r: &FrameRecord) {
+        if self.stages.is_empty() {
+            self.stages = r.stage_order.iter().map(|n| (n.clone(), 0.0)).collect();
+        }
+        for (name, t) in self.stages.iter_mut() {
+            *t += r.stages.get(name.as_str()).copied().unwrap_or(0.0);
+        }
+        self.seconds += r.seconds;
+        self.frames += 1;
+    }
+    /// Means over the frames added.
+    pub fn means(&self) -> (f64, Vec<(String, f64)>) {
+        let n = self.frames.max(1) as f64;
+        (
+            self.seconds / n,
+            self.stages
+                .iter()
+                .map(|(s, t)| (s.clone(), t / n))
+                .collect(),
+        )
+    }
+    /// Prints one line per stage that took any time (stages a run skipped are left out).
+    pub fn print(&self) {
+        let (frame, stages) = self.means();
+        println!("mean seconds per frame: {frame:.3}");
+        for (name, t) in stages.iter().filter(|(_, t)| *t > 0.0) {
+            println!("  {name:14} {:8.2} ms", t * 1e3);
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct RunRecord<'a> {
+    command: &'static str,
+    scene: &'a str,
+    adapter: &'a AdapterDesc,
+    settings: &'a config::Render,
+    gpu: &'a crate::gpu::RendererConfig,
+    frames_rendered: u32,
+    mean: &'a StageMeans,
+    frames: Vec<serde_json::Value>,
+}
+
+/// What a render did, for a caller of the library.
+pub struct RenderSummary {
+    pub adapter: AdapterDesc,
+    pub frames: config::Frames,
+    pub mean_seconds: f64,
+}
+
+/// `irad render` on a device of its own.
+pub fn render(cfg: &config::Render) -> Result<RenderSummary> {
+    cfg.validate()?;
+    let gpu = Arc::new(Gpu::new(cfg.backend)?);
+    render_on(gpu, cfg)
+}
+
+/// `irad render` on a device the caller opened.
+pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
+    cfg.validate()?;
+    let spec = cfg.scene_name();
+    let scene = load_scene(spec)?;
+    // Sizes are checked against the adapter, and the folder for writing, before any frame.
+    let mut pipeline = Pipeline::new(gpu, scene, cfg)?;
+    let out = &cfg.out;
+    report::prepare_run_dir(out)?;
+    let (frames, note) = cfg.sequence.frames_or_all(pipeline.scene.duration());
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
+    let adapter = pipeline.renderer.gpu.adapter.clone();
+    let mut log = report::JsonLines::create(&out.join("frames.jsonl"))?;
+    let mut gif = report::GifStream::create(&out.join("preview.gif"), cfg.sequence.fps)?;
+    let mut means = StageMeans::default();
+    let pb = report::progress(frames.len() as u64, "render");
+    for f in frames.iter() {
+        let fo = pipeline.render_frame(f, cfg.components)?;
+        let png = write_frame(out, &fo, cfg)?;
+        gif.push(&png)?;
+        let record = FrameRecord::of(&fo);
+        means.add(&record);
+        log.push(&record)?;
+        pb.inc(1);
+    }
+    pb.finish_and_clear();
+    drop(log);
+    gif.finish()?;
+    report::write_json(
+        &out.join("run.json"),
+        &RunRecord {
+            command: "render",
+            scene: spec,
+            adapter: &adapter,
+            settings: cfg,
+            gpu: &pipeline.renderer.config,
+            frames_rendered: frames.len(),
+            mean: &means,
+            frames: read_json_lines(&out.join("frames.jsonl"))?,
+        },
+    )?;
+    println!("adapter: {adapter}");
+    println!(
+        "{} frames of {spec} at {}, {} VPLs, sampler {}",
+        frames.len(),
+        cfg.sequence.size,
+        cfg.vpls,
+        cfg.sampler.kind
+    );
+    means.print();
+    println!(
+        "wrote {}/frame_*.exr, frame_*.png, preview.gif, run.json, frames.jsonl",
+        out.display()
+    );
+    Ok(RenderSummary {
+        adapter,
+        frames,
+        mean_seconds: means.means().0,
+    })
+}
+
+/// Writes a frame's EXR and PNG (and its components'); returns the PNG's image.
+fn write_frame(out: &Path, fo: &FrameOutput, cfg: &config::Render) -> Result<image::RgbImage> {
+    let stem = report::frame_stem(fo.index);
+    if let (Some(d), Some(i)) = (&fo.image.direct, &fo.image.indirect) {
+        for (img, part) in [(d, "direct"), (i, "indirect")] {
+            img.write_exr(&out.join(format!("{stem}_{part}.exr")))?;
+            img.write_png(&out.join(format!("{stem}_{part}.png")), cfg.exposure)?;
+        }
+    }
+    fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
+    let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
+    let png = image::RgbImage::from_raw(w, h, fo.image.ldr.clone()).expect("w*h*3 bytes");
+    crate::image::atomic_write(&out.join(format!("{stem}.png")), |tmp| {
+        png.save_with_format(tmp, image::ImageFormat::Png)
+            .map_err(anyhow::Error::from)
+    })?;
+    Ok(png)
+}
+
+/// The records of a JSON Lines file.
+pub fn read_json_lines(path: &Path) -> Result<Vec<serde_json::Value>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    text.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| serde_json::from_str(l).with_context(|| format!("{}: bad line", path.display())))
+        .collect()
+}

@@ -1,0 +1,813 @@
+//! Every command's settings, in the library: the sequence to render ([`Sequence`]), the
+//! sampler ([`SamplerConfig`]), the GPU's quality knobs ([`Quality`]), and one type per
+//! command ([`Render`], [`Reference`], [`Compare`], [`Bench`]). Each has `Default` (the one
+//! place a default lives: the CLI's help reads it from here) and one `validate()` that every
+//! command calls before it renders anything. A Rust program fills these and calls
+//! [`crate::render::render`] and friends; `irad`'s CLI only maps flags onto them.
+//!
+//! Every numeric value goes through [`check`]: NaN, infinity, sign and range, with a message
+//! that names the flag as the user typed it (`--exposure NaN is not a finite number`).
+
+use crate::gpu::{BackendChoice, RendererConfig};
+use crate::scene::Scene;
+use crate::vpl::sampler::{SamplerKind, SamplerParams};
+use anyhow::{bail, Result};
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// The checks every numeric flag goes through, with messages naming the flag.
+pub mod check {
+    use anyhow::{bail, Result};
+    use std::fmt::Display;
+
+    /// `value` must be a finite number in `lo..=hi` (`lo` excluded when `lo_open`).
+    pub fn float(flag: &str, value: f32, lo: f32, lo_open: bool, hi: f32) -> Result<()> {
+        if value.is_nan() {
+            bail!("{flag} NaN is not a number");
+        }
+        if value.is_infinite() {
+            bail!("{flag} {value} is not a finite number");
+        }
+        let low_ok = if lo_open { value > lo } else { value >= lo };
+        if !low_ok || value > hi {
+            let low = if lo_open { ">" } else { ">=" };
+            bail!("{flag} {value} is out of range: it must be {low} {lo} and at most {hi}");
+        }
+        Ok(())
+    }
+
+    /// `value` must be an integer in `lo..=hi`.
+    pub fn int<T: PartialOrd + Display + Copy>(flag: &str, value: T, lo: T, hi: T) -> Result<()> {
+        if value < lo || value > hi {
+            bail!("{flag} {value} is out of range: it must be {lo} to {hi}");
+        }
+        Ok(())
+    }
+}
+
+/// A half-open frame range `A..B`, or a single frame `N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Frames {
+    pub start: u32,
+    pub end: u32,
+}
+
+/// The most frames one range may hold.
+pub const MAX_FRAMES: u32 = 100_000;
+/// A render without `--frames` renders at most this many frames of a long animation.
+pub const DEFAULT_FRAME_CAP: u32 = 2400;
+
+impl Frames {
+    pub fn iter(&self) -> std::ops::Range<u32> {
+        self.start..self.end
+    }
+    pub fn len(&self) -> u32 {
+        self.end - self.start
+    }
+    pub fn is_empty(&self) -> bool {
+        self.end <= self.start
+    }
+}
+
+impl std::str::FromStr for Frames {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let num = |x: &str| {
+            x.trim().parse::<u32>().map_err(|_| {
+                format!("'{s}' is not a frame range: use A..B (half-open, 0..24 is 24 frames) or N (0 to {})", u32::MAX - 1)
+            })
+        };
+        let (start, end) = match s.split_once("..") {
+            Some((a, b)) => (num(a)?, num(b)?),
+            None => {
+                let n = num(s)?;
+                let end = n
+                    .checked_add(1)
+                    .ok_or_else(|| format!("frame {n} is past the last frame {}", u32::MAX - 1))?;
+                (n, end)
+            }
+        };
+        if end <= start {
+            return Err(format!(
+                "frame range '{s}' is empty (A..B renders frames A to B-1)"
+            ));
+        }
+        if end - start > MAX_FRAMES {
+            return Err(format!(
+                "frame range '{s}' has more than {MAX_FRAMES} frames"
+            ));
+        }
+        Ok(Frames { start, end })
+    }
+}
+
+impl std::fmt::Display for Frames {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)
+    }
+}
+
+/// An image size `WxH`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
+    pub width: u32,
+    pub height: u32,
+}
+
+/// The largest width or height any command accepts.
+pub const MAX_SIZE: u32 = 8192;
+
+impl std::str::FromStr for Size {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}' is not an image size: use WxH, e.g. 256x256");
+        let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+        let (width, height) = (
+            w.trim().parse::<u32>().map_err(|_| bad())?,
+            h.trim().parse::<u32>().map_err(|_| bad())?,
+        );
+        if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
+            return Err(format!(
+                "image size {s} is out of range: each side must be 1 to {MAX_SIZE}"
+            ));
+        }
+        Ok(Size { width, height })
+    }
+}
+
+impl std::fmt::Display for Size {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.width, self.height)
+    }
+}
+
+impl Serialize for Size {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+/// The sequence every rendering command renders: scene, image size, frames, rate and seed.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Sequence {
+    /// A built-in scene name (see `irad scenes`) or a .gltf/.glb path [default: the command's]
+    pub scene: Option<String>,
+    /// Image size WxH
+    #[arg(long, default_value_t = Sequence::default().size)]
+    pub size: Size,
+    /// Frames: A..B (half-open) or a single frame N; frame f is at time f / fps
+    /// [default: render and compare: the whole animation (at most 2400 frames); others: 0]
+    #[arg(long)]
+    pub frames: Option<Frames>,
+    /// Frames per second of the animation
+    #[arg(long, default_value_t = Sequence::default().fps, allow_hyphen_values = true)]
+    pub fps: f32,
+    /// Random seed; the same seed gives the same frames
+    #[arg(long, default_value_t = Sequence::default().seed, allow_hyphen_values = true)]
+    pub seed: u64,
+}
+
+impl Default for Sequence {
+    fn default() -> Self {
+        Sequence {
+            scene: None,
+            size: Size {
+                width: 256,
+                height: 256,
+            },
+            frames: None,
+            fps: 24.0,
+            seed: 1,
+        }
+    }
+}
+
+impl Sequence {
+    pub fn validate(&self) -> Result<()> {
+        check::float("--fps", self.fps, 0.0, true, 1000.0)
+    }
+    /// The scene named, or `default`.
+    pub fn scene_or<'a>(&'a self, default: &'a str) -> &'a str {
+        self.scene.as_deref().unwrap_or(default)
+    }
+    /// The frames named, or all frames of an animation of `duration` seconds (at least one,
+    /// at most [`DEFAULT_FRAME_CAP`], with a note when capped).
+    pub fn frames_or_all(&self, duration: f32) -> (Frames, Option<String>) {
+        if let Some(f) = self.frames {
+            return (f, None);
+        }
+        let all = (duration as f64 * self.fps as f64).round().max(1.0);
+        if all > DEFAULT_FRAME_CAP as f64 {
+            let note = format!(
+                "the animation lasts {duration:.1} s ({all:.0} frames at {} fps): rendering its first {DEFAULT_FRAME_CAP} frames; --frames A..B chooses others",
+                self.fps
+            );
+            return (
+                Frames {
+                    start: 0,
+                    end: DEFAULT_FRAME_CAP,
+                },
+                Some(note),
+            );
+        }
+        (
+            Frames {
+                start: 0,
+                end: all as u32,
+            },
+            None,
+        )
+    }
+    /// The frames named, or frame 0.
+    pub fn frames_or_first(&self) -> Frames {
+        self.frames.unwrap_or(Frames { start: 0, end: 1 })
+    }
+    /// The time of frame `f`, in seconds.
+    pub fn time(&self, f: u32) -> f32 {
+        (f as f64 / self.fps as f64) as f32
+    }
+}
+
+/// How the frame's VPLs are picked (stage 6).
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct SamplerConfig {
+    /// VPL sampler
+    #[arg(long = "sampler", value_enum, default_value_t = SamplerConfig::default().kind)]
+    pub kind: SamplerKind,
+    /// M: candidate VPLs a frame for cdf and mh [default: 4 x --vpls]
+    #[arg(long, allow_hyphen_values = true)]
+    pub candidates: Option<u32>,
+    /// K: camera points for importance
+    #[arg(long, default_value_t = SamplerConfig::default().camera_points, allow_hyphen_values = true)]
+    pub camera_points: u32,
+    /// Defensive floor of the importance, as a fraction of its mean
+    #[arg(long, default_value_t = SamplerConfig::default().eps, allow_hyphen_values = true)]
+    pub eps: f32,
+    /// MH: probability that a chain proposes in a frame (1: one step every frame; lower keeps
+    /// VPLs longer, at the cost of following a moving view more slowly)
+    #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
+    pub mh_rate: f32,
+    /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
+    #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
+    pub mh_escape: u32,
+}
+
+impl Default for SamplerConfig {
+    fn default() -> Self {
+        SamplerConfig {
+            kind: SamplerKind::Uniform,
+            candidates: None,
+            camera_points: 256,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_escape: 8,
+        }
+    }
+}
+
+impl SamplerConfig {
+    /// Checks the sampler's knobs for `vpls` slots (checked first, by the caller).
+    pub fn validate(&self, vpls: u32) -> Result<()> {
+        if let Some(m) = self.candidates {
+            check::int("--candidates", m, 1, 1 << 24)?;
+        }
+        check::int(
+            "--candidates (4 x --vpls)",
+            self.candidates(vpls),
+            1,
+            1 << 24,
+        )?;
+        check::int("--camera-points", self.camera_points, 1, 1 << 20)?;
+        check::float("--eps", self.eps, 0.0, false, 1000.0)?;
+        check::float("--mh-rate", self.mh_rate, 0.0, true, 1.0)?;
+        check::int("--mh-escape", self.mh_escape, 0, 1000)
+    }
+    /// M for `vpls` slots.
+    pub fn candidates(&self, vpls: u32) -> u32 {
+        self.candidates.unwrap_or(vpls.saturating_mul(4))
+    }
+}
+
+/// The GPU renderer's quality knobs (stage 7).
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Quality {
+    /// ISM tile side in texels (a power of two, 8 to 1024)
+    #[arg(long, default_value_t = Quality::default().ism_size, allow_hyphen_values = true)]
+    pub ism_size: u32,
+    /// Points each VPL splats into its ISM
+    #[arg(long, default_value_t = Quality::default().ism_points, allow_hyphen_values = true)]
+    pub ism_points: u32,
+    /// Pull-push levels of the ISMs (holes up to 2^levels texels are filled; at most log2 of --ism-size)
+    #[arg(long, default_value_t = Quality::default().pull_levels, allow_hyphen_values = true)]
+    pub pull_levels: u32,
+    /// ISM depth bias, in texel footprints
+    #[arg(long, default_value_t = Quality::default().ism_bias, allow_hyphen_values = true)]
+    pub ism_bias: f32,
+    /// Emitter samples for direct light (each a shadow hemicube)
+    #[arg(long, default_value_t = Quality::default().light_samples, allow_hyphen_values = true)]
+    pub light_samples: u32,
+    /// Shadow hemicube face side in texels
+    #[arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true)]
+    pub shadow_size: u32,
+}
+
+impl Default for Quality {
+    fn default() -> Self {
+        Quality {
+            ism_size: 64,
+            ism_points: 4096,
+            pull_levels: 3,
+            ism_bias: 1.5,
+            light_samples: 32,
+            shadow_size: 256,
+        }
+    }
+}
+
+/// Points in the scene's ISM point set for `points_per_vpl` points a slot: 16 slots' worth,
+/// between 2^16 and 2^22, and never fewer than one slot's.
+pub fn ism_point_set_size(points_per_vpl: u32) -> u32 {
+    points_per_vpl
+        .saturating_mul(16)
+        .clamp(1 << 16, 1 << 22)
+        .max(points_per_vpl)
+}
+
+impl Quality {
+    pub fn validate(&self) -> Result<()> {
+        if !self.ism_size.is_power_of_two() || !(8..=1024).contains(&self.ism_size) {
+            bail!(
+                "--ism-size {} is out of range: it must be a power of two from 8 to 1024",
+                self.ism_size
+            );
+        }
+        // The splat dispatches one invocation per point in x: 65535 groups of 64.
+        check::int("--ism-points", self.ism_points, 1, 65535 * 64)?;
+        check::int(
+            "--pull-levels",
+            self.pull_levels,
+            0,
+            self.ism_size.trailing_zeros(),
+        )?;
+        check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
+        check::int("--light-samples", self.light_samples, 1, 4096)?;
+        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)
+    }
+}
+
+/// Exposure of the PNG previews: a positive finite factor.
+pub fn check_exposure(exposure: f32) -> Result<()> {
+    check::float("--exposure", exposure, 0.0, true, 1e6)
+}
+
+/// `irad render`: GPU instant radiosity of a sequence.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Render {
+    #[command(flatten)]
+    pub sequence: Sequence,
+    /// VPL slots per frame
+    #[arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true)]
+    pub vpls: u32,
+    /// Distance clamp dmin of the VPL contribution, in scene units (0: off)
+    /// [default: 2% of the scene's bounding-box diagonal]
+    #[arg(long, allow_hyphen_values = true)]
+    pub clamp: Option<f32>,
+    #[command(flatten)]
+    pub sampler: SamplerConfig,
+    #[command(flatten)]
+    pub quality: Quality,
+    /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
+    #[arg(long, value_enum, default_value_t = Render::default().backend)]
+    pub backend: BackendChoice,
+    /// Output folder
+    #[arg(long, default_value_os_t = Render::default().out)]
+    pub out: PathBuf,
+    /// Exposure of the PNG previews (EXR files are linear, unscaled)
+    #[arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Also write each frame's direct and indirect light (frame_FFFF_direct.exr/.png, _indirect)
+    #[arg(long)]
+    pub components: bool,
+}
+
+/// The scene `irad render` and `irad compare` use when none is named.
+pub const DEFAULT_ANIMATED_SCENE: &str = "cornell-orbit";
+
+impl Default for Render {
+    fn default() -> Self {
+        Render {
+            sequence: Sequence::default(),
+            vpls: 256,
+            clamp: None,
+            sampler: SamplerConfig::default(),
+            quality: Quality::default(),
+            backend: BackendChoice::Auto,
+            out: PathBuf::from("out"),
+            exposure: 1.0,
+            components: false,
+        }
+    }
+}
+
+impl Render {
+    /// Checks every setting that does not need the scene or the adapter.
+    pub fn validate(&self) -> Result<()> {
+        self.sequence.validate()?;
+        check::int("--vpls", self.vpls, 1, 65535)?;
+        if let Some(c) = self.clamp {
+            check::float("--clamp", c, 0.0, false, 1e9)?;
+        }
+        self.sampler.validate(self.vpls)?;
+        self.quality.validate()?;
+        check_exposure(self.exposure)
+    }
+
+    /// The scene this render names, or the default animated Cornell box.
+    pub fn scene_name(&self) -> &str {
+        self.sequence.scene_or(DEFAULT_ANIMATED_SCENE)
+    }
+
+    /// The GPU renderer's sizes (checked against the adapter by the renderer).
+    pub fn renderer_config(&self) -> RendererConfig {
+        let q = &self.quality;
+        RendererConfig {
+            width: self.sequence.size.width,
+            height: self.sequence.size.height,
+            max_vpls: self.vpls,
+            ism_size: q.ism_size,
+            points_per_vpl: q.ism_points,
+            num_points: ism_point_set_size(q.ism_points),
+            pull_levels: q.pull_levels,
+            ism_bias: q.ism_bias,
+            light_samples: q.light_samples,
+            shadow_size: q.shadow_size,
+            shadow_bias: 1.5,
+            exposure: self.exposure,
+            seed: self.sequence.seed,
+        }
+    }
+
+    /// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
+    pub fn dmin(&self, scene: &Scene) -> f32 {
+        self.clamp.unwrap_or_else(|| {
+            let (lo, hi) = scene.at(0.0).bounds();
+            0.02 * (hi - lo).length()
+        })
+    }
+
+    /// The sampler's parameters for `scene`.
+    pub fn sampler_params(&self, scene: &Scene) -> SamplerParams {
+        let s = &self.sampler;
+        SamplerParams {
+            kind: s.kind,
+            slots: self.vpls as usize,
+            candidates: s.candidates(self.vpls) as usize,
+            camera_points: s.camera_points as usize,
+            eps: s.eps,
+            mh_rate: s.mh_rate,
+            mh_escape: s.mh_escape,
+            dmin: self.dmin(scene),
+            seed: self.sequence.seed,
+            width: self.sequence.size.width,
+            height: self.sequence.size.height,
+        }
+    }
+}
+
+/// `irad reference`: the path-traced ground truth.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Reference {
+    #[command(flatten)]
+    pub sequence: Sequence,
+    /// Samples per pixel
+    #[arg(long, default_value_t = Reference::default().spp, allow_hyphen_values = true)]
+    pub spp: u32,
+    /// Output folder
+    #[arg(long, default_value_os_t = Reference::default().out)]
+    pub out: PathBuf,
+    /// Exposure of the PNG previews (the EXR files are linear, unscaled)
+    #[arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+}
+
+/// The scene `irad reference` and `irad bench` use when none is named.
+pub const DEFAULT_STILL_SCENE: &str = "cornell";
+/// The most samples per pixel a reference may take.
+pub const MAX_SPP: u32 = 1 << 20;
+
+impl Default for Reference {
+    fn default() -> Self {
+        Reference {
+            sequence: Sequence::default(),
+            spp: 256,
+            out: PathBuf::from("out/reference"),
+            exposure: 1.0,
+        }
+    }
+}
+
+impl Reference {
+    pub fn validate(&self) -> Result<()> {
+        self.sequence.validate()?;
+        check::int("--spp", self.spp, 1, MAX_SPP)?;
+        check_exposure(self.exposure)
+    }
+}
+
+/// `irad compare`: samplers x VPL counts against a cached reference.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Compare {
+    #[command(flatten)]
+    pub sequence: Sequence,
+    /// Samplers to compare
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().samplers)]
+    pub samplers: Vec<SamplerKind>,
+    /// VPL counts to compare
+    #[arg(long, value_delimiter = ',', default_values_t = Compare::default().vpls, allow_hyphen_values = true)]
+    pub vpls: Vec<u32>,
+    /// Samples per pixel of the reference
+    #[arg(long, default_value_t = Compare::default().spp, allow_hyphen_values = true)]
+    pub spp: u32,
+    /// Output folder
+    #[arg(long, default_value_os_t = Compare::default().out)]
+    pub out: PathBuf,
+    /// Where reference frames are cached (keyed by scene, size, spp, fps and seed)
+    #[arg(long, default_value_os_t = Compare::default().cache)]
+    pub cache: PathBuf,
+    /// The VPL count whose animations the report shows [default: the middle one]
+    #[arg(long, allow_hyphen_values = true)]
+    pub show_vpls: Option<u32>,
+    /// Every run's renderer settings besides the sampler kind and VPL count (--mh-rate,
+    /// --ism-size, --backend, --exposure, ...)
+    #[command(flatten)]
+    pub render: CompareRender,
+}
+
+/// What every run of a comparison shares: the renderer's knobs except the sampler kind, the
+/// VPL count, the sequence and the output folder, which the comparison sets per run.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct CompareRender {
+    /// Distance clamp dmin (see `irad render --help`)
+    #[arg(long, allow_hyphen_values = true)]
+    pub clamp: Option<f32>,
+    /// MH: probability that a chain proposes in a frame
+    #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
+    pub mh_rate: f32,
+    /// MH: extra proposals for a chain whose VPL no camera point sees
+    #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
+    pub mh_escape: u32,
+    /// K: camera points for importance
+    #[arg(long, default_value_t = SamplerConfig::default().camera_points, allow_hyphen_values = true)]
+    pub camera_points: u32,
+    /// Defensive floor of the importance, as a fraction of its mean
+    #[arg(long, default_value_t = SamplerConfig::default().eps, allow_hyphen_values = true)]
+    pub eps: f32,
+    #[command(flatten)]
+    pub quality: Quality,
+    /// Graphics backend
+    #[arg(long, value_enum, default_value_t = Render::default().backend)]
+    pub backend: BackendChoice,
+    /// Exposure of previews
+    #[arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+}
+
+impl Default for CompareRender {
+    fn default() -> Self {
+        let r = Render::default();
+        CompareRender {
+            clamp: r.clamp,
+            mh_rate: r.sampler.mh_rate,
+            mh_escape: r.sampler.mh_escape,
+            camera_points: r.sampler.camera_points,
+            eps: r.sampler.eps,
+            quality: r.quality,
+            backend: r.backend,
+            exposure: r.exposure,
+        }
+    }
+}
+
+impl Default for Compare {
+    fn default() -> Self {
+        Compare {
+            sequence: Sequence::default(),
+            samplers: vec![SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh],
+            vpls: vec![64, 256, 1024],
+            spp: 256,
+            out: PathBuf::from("out/compare"),
+            cache: PathBuf::from("out/cache"),
+            show_vpls: None,
+            render: CompareRender::default(),
+        }
+    }
+}
+
+impl Compare {
+    /// The render settings of the run of `sampler` at `vpls`.
+    pub fn run(&self, sampler: SamplerKind, vpls: u32) -> Render {
+        let r = &self.render;
+        Render {
+            sequence: self.sequence.clone(),
+            vpls,
+            clamp: r.clamp,
+            sampler: SamplerConfig {
+                kind: sampler,
+                candidates: None,
+                camera_points: r.camera_points,
+                eps: r.eps,
+                mh_rate: r.mh_rate,
+                mh_escape: r.mh_escape,
+            },
+            quality: r.quality.clone(),
+            backend: r.backend,
+            out: self.out.clone(),
+            exposure: r.exposure,
+            components: false,
+        }
+    }
+
+    /// The VPL count whose animations the report shows.
+    pub fn shown_vpls(&self) -> u32 {
+        self.show_vpls
+            .unwrap_or_else(|| self.vpls.get(self.vpls.len() / 2).copied().unwrap_or(0))
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        self.sequence.validate()?;
+        if self.samplers.is_empty() {
+            bail!("--samplers needs at least one sampler");
+        }
+        if self.vpls.is_empty() {
+            bail!("--vpls needs at least one VPL count");
+        }
+        check::int("--spp", self.spp, 1, MAX_SPP)?;
+        if let Some(v) = self.show_vpls {
+            if !self.vpls.contains(&v) {
+                bail!("--show-vpls {v} is not one of --vpls {:?}", self.vpls);
+            }
+        }
+        // Every run's settings, checked before anything renders.
+        for &s in &self.samplers {
+            for &v in &self.vpls {
+                self.run(s, v).validate()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The scene this comparison names, or the default animated Cornell box.
+    pub fn scene_name(&self) -> &str {
+        self.sequence.scene_or(DEFAULT_ANIMATED_SCENE)
+    }
+}
+
+/// One bench configuration: VPL count and image size, written `256@256x256`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BenchCase {
+    pub vpls: u32,
+    pub size: Size,
+}
+
+impl std::str::FromStr for BenchCase {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (v, size) = s
+            .split_once('@')
+            .ok_or_else(|| format!("'{s}' is not VPLS@WxH (e.g. 256@256x256)"))?;
+        Ok(BenchCase {
+            vpls: v
+                .trim()
+                .parse()
+                .map_err(|_| format!("'{v}' in '{s}' is not a VPL count"))?,
+            size: size.parse()?,
+        })
+    }
+}
+
+impl std::fmt::Display for BenchCase {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}@{}", self.vpls, self.size)
+    }
+}
+
+impl Serialize for BenchCase {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+/// `irad bench`: time per stage of whole frames for several configurations.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Bench {
+    #[command(flatten)]
+    pub render: Render,
+    /// Configurations VPLS@WxH (each overrides --vpls and --size)
+    #[arg(long = "configs", value_delimiter = ',', default_values_t = Bench::default().cases)]
+    pub cases: Vec<BenchCase>,
+    /// Frames measured per configuration (after one warm-up frame)
+    #[arg(long, default_value_t = Bench::default().repeat, allow_hyphen_values = true)]
+    pub repeat: u32,
+}
+
+impl Default for Bench {
+    fn default() -> Self {
+        Bench {
+            render: Render::default(),
+            cases: vec![
+                BenchCase {
+                    vpls: 256,
+                    size: Size {
+                        width: 256,
+                        height: 256,
+                    },
+                },
+                BenchCase {
+                    vpls: 1024,
+                    size: Size {
+                        width: 512,
+                        height: 512,
+                    },
+                },
+            ],
+            repeat: 5,
+        }
+    }
+}
+
+impl Bench {
+    /// The render settings of one case.
+    pub fn case(&self, c: BenchCase) -> Render {
+        let mut r = self.render.clone();
+        r.vpls = c.vpls;
+        r.sequence.size = c.size;
+        r
+    }
+    pub fn validate(&self) -> Result<()> {
+        if self.cases.is_empty() {
+            bail!("--configs needs at least one VPLS@WxH");
+        }
+        check::int("--repeat", self.repeat, 1, 10_000)?;
+        for &c in &self.cases {
+            self.case(c).validate()?;
+        }
+        Ok(())
+    }
+    /// The scene benchmarked, or the still Cornell box.
+    pub fn scene_name(&self) -> &str {
+        self.render.sequence.scene_or(DEFAULT_STILL_SCENE)
+    }
+}
+
+impl std::fmt::Display for SamplerKind {
+    /// The name the CLI spells (`uniform`, `cdf`, `mh`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use clap::ValueEnum;
+        let v = self.to_possible_value().expect("no skipped variants");
+        f.write_str(v.get_name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_and_sizes_parse_as_documented() {
+        assert_eq!("0..24".parse::<Frames>().unwrap().len(), 24);
+        assert_eq!("7".parse::<Frames>().unwrap(), Frames { start: 7, end: 8 });
+        assert!("5..5".parse::<Frames>().unwrap_err().contains("empty"));
+        assert!("a..b".parse::<Frames>().is_err());
+        let last = "4294967295".parse::<Frames>().unwrap_err();
+        assert!(last.contains("past the last frame"), "{last}");
+        assert_eq!(
+            "256x128".parse::<Size>().unwrap(),
+            Size {
+                width: 256,
+                height: 128
+            }
+        );
+        assert!("0x10".parse::<Size>().unwrap_err().contains("out of range"));
+        assert!("100000x10".parse::<Size>().is_err());
+        assert!("256".parse::<Size>().is_err());
+    }
+
+    #[test]
+    fn defaults_validate() {
+        Render::default().validate().unwrap();
+        Reference::default().validate().unwrap();
+        Compare::default().validate().unwrap();
+        Bench::default().validate().unwrap();
+    }
+
+    #[test]
+    fn a_long_animation_is_capped_with_a_note_and_a_short_one_is_whole() {
+        let s = Sequence::default();
+        let (f, note) = s.frames_or_all(3.0);
+        assert_eq!((f.start, f.end, note), (0, 72, None));
+        let (f, note) = s.frames_or_all(3.0e7);
+        assert_eq!(f.end, DEFAULT_FRAME_CAP);
+        assert!(note.unwrap().contains("first 2400 frames"));
+    }
+}

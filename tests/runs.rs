@@ -1,0 +1,206 @@
+//! What a run does as a whole: one device per command, output folders that never mix two
+//! runs' frames, memory that stays flat over a long render, and what a run prints.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn irad(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args(args)
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("irad-runs-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// The cheapest render settings: tiny ISMs, one emitter sample, few VPLs.
+const CHEAP: &[&str] = &[
+    "--vpls",
+    "8",
+    "--ism-size",
+    "8",
+    "--ism-points",
+    "64",
+    "--pull-levels",
+    "1",
+    "--light-samples",
+    "1",
+    "--shadow-size",
+    "8",
+    "--camera-points",
+    "4",
+];
+
+fn frame_files(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("frame_"))
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_render_into_an_earlier_runs_folder_removes_its_frames_and_says_so() {
+    let out = tmp("stale");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["render", "cornell", "--size", "16x16", "--out", o];
+    args.extend_from_slice(CHEAP);
+    let first = irad(&[&args[..], &["--frames", "0..3"]].concat());
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let second = irad(&[&args[..], &["--frames", "5..6"]].concat());
+    assert!(second.status.success());
+    let err = String::from_utf8_lossy(&second.stderr);
+    // 3 frames x (EXR + PNG) + preview.gif + run.json + frames.jsonl.
+    assert!(err.contains("removed 9 files of an earlier run"), "{err}");
+    assert_eq!(frame_files(&out), ["frame_0005.exr", "frame_0005.png"]);
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["frames"].as_array().unwrap().len(), 1);
+    assert_eq!(run["frames"][0]["frame"], 5);
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn a_render_prints_the_adapter_once_the_sampler_as_spelled_and_no_mesa_noise() {
+    let out = tmp("print");
+    let mut args = vec![
+        "render",
+        "cornell",
+        "--size",
+        "16x16",
+        "--frames",
+        "0..2",
+        "--sampler",
+        "mh",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(CHEAP);
+    let r = irad(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (so, se) = (
+        String::from_utf8_lossy(&r.stdout),
+        String::from_utf8_lossy(&r.stderr),
+    );
+    let both = format!("{so}{se}");
+    assert_eq!(both.matches("adapter:").count(), 1, "{both}");
+    assert!(so.contains("sampler mh"), "{so}");
+    assert!(!both.contains("XDG_RUNTIME_DIR"), "{both}");
+    assert!(so.contains("  importance "), "{so}");
+    // With uniform no importance is computed: its row is left out, not printed as 0.00 ms.
+    let args: Vec<&str> = args
+        .iter()
+        .map(|&a| if a == "mh" { "uniform" } else { a })
+        .collect();
+    let uniform = irad(&args);
+    let so = String::from_utf8_lossy(&uniform.stdout);
+    assert!(
+        so.contains("sampler uniform") && so.contains("  gather "),
+        "{so}"
+    );
+    assert!(!so.contains("importance"), "{so}");
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// 600 frames at 256x256: the resident memory after frame 599 is within a few MiB of the
+/// memory after frame 100 (before this was fixed, every preview was kept for the GIF:
+/// +0.38 MiB a frame, about 190 MiB over these 500 frames). `frames.jsonl` gets one record a
+/// frame, and run.json is written once, whole.
+///
+/// On GL (llvmpipe). On Vulkan through lavapipe (Mesa 22.3.6) the process still grows about
+/// 0.18 MiB a frame, and the growth stops when the `direct` pass is not dispatched (every other
+/// pass and all of irad's own writing skipped or not changes nothing): a leak inside the driver
+/// path of that pass, left open in the README.
+#[test]
+fn a_long_render_holds_its_memory_flat() {
+    let out = tmp("long");
+    let mut args = vec![
+        "render",
+        "cornell",
+        "--backend",
+        "gl",
+        "--size",
+        "256x256",
+        "--frames",
+        "0..600",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(CHEAP);
+    let r = irad(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let text = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
+    let rss: Vec<f64> = text
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v["rss_mib"].as_f64().unwrap()
+        })
+        .collect();
+    assert_eq!(rss.len(), 600);
+    let growth = rss[599] - rss[100];
+    println!(
+        "RSS after frame 0: {:.1} MiB, 100: {:.1} MiB, 599: {:.1} MiB, growth {growth:+.2} MiB",
+        rss[0], rss[100], rss[599]
+    );
+    // Measured on llvmpipe: +0.0 MiB (RSS 101.9 MiB at frames 100 and 599).
+    assert!(growth < 4.0, "memory grew {growth:.1} MiB over 500 frames");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["frames"].as_array().unwrap().len(), 600);
+    let gif = std::fs::File::open(out.join("preview.gif")).unwrap();
+    let frames = image::AnimationDecoder::into_frames(
+        image::codecs::gif::GifDecoder::new(std::io::BufReader::new(gif)).unwrap(),
+    )
+    .count();
+    assert_eq!(frames, 600);
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// `irad compare` opens one GPU device for the whole matrix of runs (it used to open one
+/// per run, and one more to check the settings).
+#[test]
+fn a_comparison_opens_one_device_for_all_its_runs() {
+    use irad::config;
+    let out = tmp("compare-device");
+    let mut cfg = config::Compare::default();
+    cfg.sequence.scene = Some("cornell-orbit".into());
+    cfg.sequence.size = config::Size {
+        width: 12,
+        height: 12,
+    };
+    cfg.sequence.frames = Some("0..2".parse().unwrap());
+    cfg.samplers = vec![
+        irad::vpl::sampler::SamplerKind::Uniform,
+        irad::vpl::sampler::SamplerKind::Mh,
+    ];
+    cfg.vpls = vec![4, 8];
+    cfg.spp = 2;
+    cfg.out = out.join("report");
+    cfg.cache = out.join("cache");
+    cfg.render.quality.ism_size = 8;
+    cfg.render.quality.ism_points = 64;
+    cfg.render.quality.pull_levels = 1;
+    cfg.render.quality.light_samples = 1;
+    cfg.render.quality.shadow_size = 8;
+    let before = irad::gpu::devices_opened();
+    irad::commands::compare::compare(&cfg).unwrap();
+    assert_eq!(irad::gpu::devices_opened() - before, 1);
+    let m: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(cfg.out.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(m["runs"].as_array().unwrap().len(), 4);
+    std::fs::remove_dir_all(&out).unwrap();
+}
