@@ -45,7 +45,7 @@ struct Params {
     shadow_bias: f32,
     near: f32,
     pull_levels: u32,
-    pad: u32,
+    num_changed: u32, // ISM slots redrawn this frame
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

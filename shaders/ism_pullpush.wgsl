@@ -3,10 +3,12 @@
 // hole. `decode` turns the splat atlas into level 0; `pull` averages the valid children into
 // the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
+// Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
+@group(0) @binding(3) var<storage, read> slots: array<vec2u>;
 
 struct Level {
     level: u32,
@@ -18,13 +20,14 @@ struct Level {
 
 @compute @workgroup_size(64)
 fn decode(@builtin(global_invocation_id) gid: vec3u) {
-    let n = P.num_vpls * P.ism_size * P.ism_size;
+    let per_tile = P.ism_size * P.ism_size;
     let i = gid.x + gid.y * 65535u * 64u;
-    if i >= n {
+    if i >= P.num_changed * per_tile {
         return;
     }
-    let e = atlas[i];
-    pyramid[i] = select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
+    let t = slots[i / per_tile].x * per_tile + i % per_tile;
+    let e = atlas[t];
+    pyramid[t] = select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
 }
 
 // One invocation per texel of the coarser level `L.size / 2`.
@@ -33,10 +36,10 @@ fn pull(@builtin(global_invocation_id) gid: vec3u) {
     let half = L.size / 2u;
     let per_tile = half * half;
     let i = gid.x + gid.y * 65535u * 64u;
-    if i >= P.num_vpls * per_tile {
+    if i >= P.num_changed * per_tile {
         return;
     }
-    let tile = i / per_tile;
+    let tile = slots[i / per_tile].x;
     let k = i % per_tile;
     let x = (k % half) * 2u;
     let y = (k / half) * 2u;
@@ -52,7 +55,7 @@ fn pull(@builtin(global_invocation_id) gid: vec3u) {
             }
         }
     }
-    pyramid[L.parent_offset + i] = select(-1.0, sum / max(count, 1.0) + 4.0 * f32(L.level + 1u), count > 0.0);
+    pyramid[L.parent_offset + tile * per_tile + k] = select(-1.0, sum / max(count, 1.0) + 4.0 * f32(L.level + 1u), count > 0.0);
 }
 
 // One invocation per texel of level `L.size`.
@@ -60,15 +63,16 @@ fn pull(@builtin(global_invocation_id) gid: vec3u) {
 fn push(@builtin(global_invocation_id) gid: vec3u) {
     let per_tile = L.size * L.size;
     let i = gid.x + gid.y * 65535u * 64u;
-    if i >= P.num_vpls * per_tile {
+    if i >= P.num_changed * per_tile {
         return;
     }
-    if pyramid[L.offset + i] >= 0.0 {
-        return;
-    }
-    let tile = i / per_tile;
+    let tile = slots[i / per_tile].x;
     let k = i % per_tile;
+    let at = L.offset + tile * per_tile + k;
+    if pyramid[at] >= 0.0 {
+        return;
+    }
     let half = L.size / 2u;
     let parent = L.parent_offset + tile * half * half + ((k / L.size) / 2u) * half + (k % L.size) / 2u;
-    pyramid[L.offset + i] = pyramid[parent];
+    pyramid[at] = pyramid[parent];
 }

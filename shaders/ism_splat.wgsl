@@ -1,5 +1,7 @@
-// ISM splat: every VPL slot projects its own subset of the scene's points into its paraboloid
-// tile, keeping the nearest with atomicMax on an inverted depth (0 means empty).
+// ISM splat: every VPL slot to redraw projects its own subset of the scene's points into its
+// paraboloid tile, keeping the nearest with atomicMax on an inverted depth (0 means empty).
+// `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other slots keep
+// their tiles.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -11,17 +13,29 @@ struct Point {
 }
 @group(0) @binding(2) var<storage, read> points: array<Point>;
 @group(0) @binding(3) var<storage, read> vpls: array<Vpl>;
-@group(0) @binding(4) var<storage, read> slot_offset: array<u32>;
+@group(0) @binding(4) var<storage, read> slots: array<vec2u>;
 @group(0) @binding(5) var<storage, read_write> atlas: array<atomic<u32>>;
+
+// Empties the tiles of the slots to redraw (one invocation per texel).
+@compute @workgroup_size(64)
+fn clear(@builtin(global_invocation_id) gid: vec3u) {
+    let per_tile = P.ism_size * P.ism_size;
+    let i = gid.x + gid.y * 65535u * 64u;
+    if i >= P.num_changed * per_tile {
+        return;
+    }
+    atomicStore(&atlas[slots[i / per_tile].x * per_tile + i % per_tile], 0u);
+}
 
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     let j = gid.x;
-    let s = gid.y;
-    if j >= P.points_per_vpl || s >= P.num_vpls {
+    let k = gid.y;
+    if j >= P.points_per_vpl || k >= P.num_changed {
         return;
     }
-    let pt = points[(slot_offset[s] + j) % P.num_points];
+    let s = slots[k].x;
+    let pt = points[(slots[k].y + j) % P.num_points];
     let tri = tris[pt.tri];
     let p = tri.v0.xyz * (1.0 - pt.b1 - pt.b2) + tri.v1.xyz * pt.b1 + tri.v2.xyz * pt.b2;
     let v = vpls[s];

@@ -160,12 +160,30 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let mut img = Hdr::new(3, 2);
         img.data[1] = Vec3::new(0.25, 2.5, 100.0);
-        img.data[5] = Vec3::new(0.5, 0.0, 0.001);
+        img.data[5] = Vec3::new(0.05, 0.8, 0.001);
         img.write_exr(&dir.join("a.exr")).unwrap();
         assert_eq!(Hdr::read(&dir.join("a.exr")).unwrap(), img);
+        // The PNG's bytes against the sRGB curve worked by hand (IEC 61966-2-1), channel by
+        // channel: 0.25 -> 255 (1.055 * 0.25^(1/2.4) - 0.055) = 136.96 -> 137; over 1 -> 255;
+        // 0.05 -> 63.19 -> 63; 0.8 -> 231.11 -> 231; 0.001 -> 255 * 12.92 * 0.001 = 3.29 -> 3.
+        // A gamma of 2.2 gives (136, 255, 255) and (65, 230, 11); swapped R and B fail too.
         img.write_png(&dir.join("a.png"), 1.0).unwrap();
+        let png = image::open(dir.join("a.png")).unwrap().to_rgb8();
+        assert_eq!(png.get_pixel(1, 0).0, [137, 255, 255]);
+        assert_eq!(png.get_pixel(2, 1).0, [63, 231, 3]);
+        assert_eq!(png.get_pixel(0, 0).0, [0, 0, 0]);
+        // Exposure scales before the curve: 0.5 x (0.5, 0.1, 0.002) = (0.25, 0.05, 0.001).
+        let mut half = Hdr::new(1, 1);
+        half.data[0] = Vec3::new(0.5, 0.1, 0.002);
+        assert_eq!(half.to_srgb8(0.5), vec![137, 63, 3]);
+        // Reading an 8-bit file decodes sRGB: byte 137 is ((137/255 + 0.055) / 1.055)^2.4 =
+        // 0.250158, byte 63 is 0.049707, byte 231 is 0.799103, byte 3 is 3/255/12.92 = 0.000911.
         let back = Hdr::read(&dir.join("a.png")).unwrap();
-        assert!((back.at(2, 1).x - 0.5).abs() < 0.01 && back.at(1, 0).y == 1.0);
+        let want = [0.049707, 0.799103, 0.000911];
+        for (got, want) in back.at(2, 1).to_array().into_iter().zip(want) {
+            assert!((got - want).abs() < 1e-5, "{} vs {want:?}", back.at(2, 1));
+        }
+        assert!((back.at(1, 0).x - 0.250158).abs() < 1e-5 && back.at(1, 0).y == 1.0);
         assert!(std::fs::read_dir(&dir).unwrap().all(|e| !e
             .unwrap()
             .file_name()

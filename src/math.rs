@@ -88,6 +88,8 @@ mod tests {
             .sum::<f32>()
             / m as f32;
         // E[cos] under pdf cos/pi is 2/3.
-        assert!((mean - 2.0 / 3.0).abs() < 0.005, "{mean}");
+        println!("mean cos {mean}, error {}", (mean - 2.0 / 3.0).abs());
+        // Measured error 0.000228 (the standard error is 0.00075 at 100000 samples).
+        assert!((mean - 2.0 / 3.0).abs() < 0.00034, "{mean}");
     }
 }

@@ -126,6 +126,8 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
                 "quadrant {k}: {name} {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
                 e.mean[k], e.se[k], uniform.mean[k], uniform.se[k]
             );
+            // Measured: z at most 1.51 (mh escape 8, quadrant 3), 0.94 for cdf. The bound is
+            // statistical (|z| > 4 happens with probability 6e-5), not fitted to these values.
             assert!(
                 z < 4.0,
                 "{name} quadrant {k}: {} vs uniform {} (z = {z})",
@@ -164,26 +166,36 @@ fn mh_keeps_vpls_cdf_replaces_them() {
         mh_rate: 0.2,
         ..params(SamplerKind::Mh, 3)
     });
-    println!("replaced per frame: cdf {cdf:.3}, mh {mh:.3}, mh at rate 0.2 {lazy:.3}");
+    println!("replaced per frame: cdf {cdf:.4}, mh {mh:.4}, mh at rate 0.2 {lazy:.4}");
+    // Measured: cdf 1.0000, mh 0.6444, mh at rate 0.2 0.1045.
     assert!(cdf > 0.95, "cdf replaced {cdf}");
-    assert!(mh < 0.75 && mh > 0.2, "mh replaced {mh}");
-    assert!(lazy < 0.2, "mh at rate 0.2 replaced {lazy}");
+    assert!(mh < 0.75 && mh > 0.43, "mh replaced {mh}");
+    assert!(lazy < 0.15, "mh at rate 0.2 replaced {lazy}");
     let _ = Vec3::ZERO;
 }
 
-/// A kept slot keeps its VPL's identity and, in a still scene, its exact position and weight's
-/// inputs: the MH selection is a pure function of (seed, frame) and the chain state.
+/// Determinism, for every sampler: two samplers with the same seed select bit-identical VPLs
+/// frame after frame (the MH chains included); another seed selects other VPLs in every frame.
 #[test]
-fn samplers_are_deterministic() {
+fn same_seed_same_vpls_other_seed_other_vpls() {
     let scene = builtin::load("cornell-orbit").unwrap().unwrap();
     let tracer = Tracer::new(&scene.at(0.0));
+    let bits = |v: &[irad::vpl::ShadedVpl]| -> Vec<u32> {
+        v.iter()
+            .flat_map(|s| [s.position, s.normal, s.flux])
+            .flat_map(|c| c.to_array().map(f32::to_bits))
+            .collect()
+    };
     for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {
         let mut a = Sampler::new(params(kind, 5));
         let mut b = Sampler::new(params(kind, 5));
+        let mut other = Sampler::new(params(kind, 6));
         for f in 0..4 {
             let frame = scene.at(f as f32 / 24.0);
             let (x, y) = (a.select(&frame, &tracer, f), b.select(&frame, &tracer, f));
-            assert_eq!(x.shaded, y.shaded, "{kind:?} frame {f}");
+            assert_eq!(bits(&x.shaded), bits(&y.shaded), "{kind:?} frame {f}");
+            let z = other.select(&frame, &tracer, f);
+            assert_ne!(x.shaded, z.shaded, "{kind:?} frame {f}: seed 6 = seed 5");
         }
     }
 }

@@ -1,7 +1,26 @@
 //! Compose pass (`shaders/compose.wgsl`): emission + direct + indirect into the HDR frame,
 //! then exposure and sRGB into the 8-bit preview.
 
-use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
+use super::bindings::{bytes, read, read_write, texture, uniform, Elem, Group, Pass};
+use super::common::{Params, Tri};
+use super::{Gpu, PixelPass};
+
+pub(crate) const PASS: Pass = Pass {
+    name: "compose",
+    wgsl: include_str!("../../shaders/compose.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::COMPUTE,
+        bindings: &[
+            uniform("P", &Params::LAYOUT),
+            read("tris", Elem::Struct(&Tri::LAYOUT)),
+            texture("gbuf", wgpu::TextureViewDimension::D2),
+            read("direct", Elem::Plain(16)),
+            read("indirect", Elem::Plain(16)),
+            read_write("hdr", Elem::Plain(16)),
+            read_write("ldr", Elem::Plain(4)),
+        ],
+    }],
+};
 
 pub struct Compose {
     pass: PixelPass,
@@ -20,29 +39,19 @@ impl Compose {
         pixels: u64,
     ) -> Self {
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let hdr = gpu.buffer("hdr", pixels * 16, usage);
-        let ldr = gpu.buffer("ldr", pixels * 4, usage);
+        let hdr = gpu.buffer("hdr", bytes::<[f32; 4]>(pixels), usage);
+        let ldr = gpu.buffer("ldr", bytes::<u32>(pixels), usage);
         let pass = PixelPass::new(
             gpu,
-            "compose",
-            include_str!("../../shaders/compose.wgsl"),
+            &PASS,
             &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                texture_entry(2, wgpu::TextureViewDimension::D2),
-                storage_entry(3, true),
-                storage_entry(4, true),
-                storage_entry(5, false),
-                storage_entry(6, false),
-            ],
-            &[
-                params.as_entire_binding(),
-                tris.as_entire_binding(),
-                wgpu::BindingResource::TextureView(gbuf),
-                direct.as_entire_binding(),
-                indirect.as_entire_binding(),
-                hdr.as_entire_binding(),
-                ldr.as_entire_binding(),
+                ("P", params.as_entire_binding()),
+                ("tris", tris.as_entire_binding()),
+                ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("direct", direct.as_entire_binding()),
+                ("indirect", indirect.as_entire_binding()),
+                ("hdr", hdr.as_entire_binding()),
+                ("ldr", ldr.as_entire_binding()),
             ],
         );
         Compose { pass, hdr, ldr }

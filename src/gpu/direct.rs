@@ -1,7 +1,25 @@
 //! Direct-light pass (`shaders/direct.wgsl`): stratified emitter samples with shadow
 //! hemicube visibility. Its CPU twin is `reference::twin::direct`.
 
-use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
+use super::bindings::{read, read_write, texture, uniform, Elem, Group, Pass};
+use super::common::{LightSample, Params, Tri};
+use super::{Gpu, PixelPass};
+
+pub(crate) const PASS: Pass = Pass {
+    name: "direct",
+    wgsl: include_str!("../../shaders/direct.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::COMPUTE,
+        bindings: &[
+            uniform("P", &Params::LAYOUT),
+            read("tris", Elem::Struct(&Tri::LAYOUT)),
+            read("lights", Elem::Struct(&LightSample::LAYOUT)),
+            texture("shadows", wgpu::TextureViewDimension::D2Array),
+            texture("gbuf", wgpu::TextureViewDimension::D2),
+            read_write("direct", Elem::Plain(16)),
+        ],
+    }],
+};
 
 pub struct Direct {
     pass: PixelPass,
@@ -20,28 +38,19 @@ impl Direct {
     ) -> Self {
         let output = gpu.buffer(
             "direct",
-            pixels * 16,
+            super::bindings::bytes::<[f32; 4]>(pixels),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
         let pass = PixelPass::new(
             gpu,
-            "direct",
-            include_str!("../../shaders/direct.wgsl"),
+            &PASS,
             &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                texture_entry(3, wgpu::TextureViewDimension::D2Array),
-                texture_entry(4, wgpu::TextureViewDimension::D2),
-                storage_entry(5, false),
-            ],
-            &[
-                params.as_entire_binding(),
-                tris.as_entire_binding(),
-                lights.as_entire_binding(),
-                wgpu::BindingResource::TextureView(shadows),
-                wgpu::BindingResource::TextureView(gbuf),
-                output.as_entire_binding(),
+                ("P", params.as_entire_binding()),
+                ("tris", tris.as_entire_binding()),
+                ("lights", lights.as_entire_binding()),
+                ("shadows", wgpu::BindingResource::TextureView(shadows)),
+                ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("direct", output.as_entire_binding()),
             ],
         );
         Direct { pass, output }

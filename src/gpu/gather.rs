@@ -1,7 +1,25 @@
 //! Gather pass (`shaders/gather.wgsl`): indirect light of all VPLs per pixel with ISM
 //! visibility. Its CPU twin, with ray-traced visibility, is `reference::twin::gather`.
 
-use super::{storage_entry, texture_entry, uniform_entry, Gpu, PixelPass};
+use super::bindings::{read, read_write, texture, uniform, Elem, Group, Pass};
+use super::common::{Params, Tri, Vpl};
+use super::{Gpu, PixelPass};
+
+pub(crate) const PASS: Pass = Pass {
+    name: "gather",
+    wgsl: include_str!("../../shaders/gather.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::COMPUTE,
+        bindings: &[
+            uniform("P", &Params::LAYOUT),
+            read("tris", Elem::Struct(&Tri::LAYOUT)),
+            read("vpls", Elem::Struct(&Vpl::LAYOUT)),
+            read("ism", Elem::Plain(4)),
+            texture("gbuf", wgpu::TextureViewDimension::D2),
+            read_write("indirect", Elem::Plain(16)),
+        ],
+    }],
+};
 
 pub struct Gather {
     pass: PixelPass,
@@ -20,28 +38,19 @@ impl Gather {
     ) -> Self {
         let output = gpu.buffer(
             "indirect",
-            pixels * 16,
+            super::bindings::bytes::<[f32; 4]>(pixels),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
         let pass = PixelPass::new(
             gpu,
-            "gather",
-            include_str!("../../shaders/gather.wgsl"),
+            &PASS,
             &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, true),
-                texture_entry(4, wgpu::TextureViewDimension::D2),
-                storage_entry(5, false),
-            ],
-            &[
-                params.as_entire_binding(),
-                tris.as_entire_binding(),
-                vpls.as_entire_binding(),
-                ism.as_entire_binding(),
-                wgpu::BindingResource::TextureView(gbuf),
-                output.as_entire_binding(),
+                ("P", params.as_entire_binding()),
+                ("tris", tris.as_entire_binding()),
+                ("vpls", vpls.as_entire_binding()),
+                ("ism", ism.as_entire_binding()),
+                ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("indirect", output.as_entire_binding()),
             ],
         );
         Gather { pass, output }

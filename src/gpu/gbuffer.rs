@@ -1,10 +1,52 @@
 //! G-buffer pass (`shaders/gbuffer.wgsl`): the camera's view rasterized into world position
 //! and triangle index per pixel, at pixel centres.
 
+use super::bindings::{gpu_struct, Group, Pass};
 use super::Gpu;
 use glam::Mat4;
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+
+gpu_struct! {
+    /// The camera's view-projection matrix (column-major).
+    pub(crate) struct Camera {
+        pub view_proj: [[f32; 4]; 4],
+    }
+}
+
+pub(crate) const PASS: Pass = Pass {
+    name: "gbuffer",
+    wgsl: include_str!("../../shaders/gbuffer.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::VERTEX,
+        bindings: &[super::bindings::uniform("cam", &Camera::LAYOUT)],
+    }],
+};
+
+/// One vertex of the scene's vertex buffer (shared by the G-buffer and shadow passes):
+/// position and the index of its triangle.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(crate) struct Vertex {
+    pub pos: [f32; 3],
+    pub tri: u32,
+}
+
+impl Vertex {
+    /// Locations 0 and 1 of the `vs` entry points.
+    pub(crate) const ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: std::mem::offset_of!(Vertex, pos) as u64,
+            shader_location: 0,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Uint32,
+            offset: std::mem::offset_of!(Vertex, tri) as u64,
+            shader_location: 1,
+        },
+    ];
+}
 
 pub struct GBuffer {
     pipeline: wgpu::RenderPipeline,
@@ -45,18 +87,20 @@ pub(crate) fn target(
 
 impl GBuffer {
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> Self {
-        let module = gpu.shader("gbuffer", include_str!("../../shaders/gbuffer.wgsl"));
-        let layout = gpu.layout(
-            "gbuffer",
-            &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX, false)],
-        );
-        let pipeline = gpu.raster_pipeline("gbuffer", &module, &layout, FORMAT);
+        let module = PASS.module(gpu);
+        let layout = PASS.groups[0].layout(gpu, PASS.name);
+        let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
         let uniform = gpu.buffer(
             "gbuffer camera",
-            64,
+            std::mem::size_of::<Camera>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = gpu.bind("gbuffer", &layout, &[uniform.as_entire_binding()]);
+        let bind_group = PASS.groups[0].bind(
+            gpu,
+            PASS.name,
+            &layout,
+            &[("cam", uniform.as_entire_binding())],
+        );
         let view =
             target(gpu, "gbuffer", width, height, 1, FORMAT, true).create_view(&Default::default());
         let depth = target(
@@ -86,8 +130,11 @@ impl GBuffer {
         count: u32,
         view_proj: Mat4,
     ) {
+        let cam = Camera {
+            view_proj: view_proj.to_cols_array_2d(),
+        };
         gpu.queue
-            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&view_proj));
+            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&cam));
         raster(
             enc,
             "gbuffer",

@@ -3,24 +3,76 @@
 //! The point set: points on the surfaces in proportion to area, kept as (triangle,
 //! barycentrics) so they follow moving geometry, in random order. VPL slot s splats the
 //! `points_per_vpl` points starting at its own random offset, so each slot has its own random
-//! subset, and a slot that keeps its VPL keeps its subset. Each splat writes the nearest depth
+//! subset, and a slot that keeps its VPL keeps its subset (and its tile, while the geometry is
+//! still: only the slots the renderer lists are redrawn). Each splat writes the nearest depth
 //! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
 //! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
 
-use super::{dispatch, groups_1d, storage_entry, uniform_entry, Gpu};
+use super::bindings::{bytes, gpu_struct, read, read_write, uniform, Elem, Group, Pass};
+use super::common::{Params, Tri, Vpl};
+use super::{dispatch, groups_1d, Gpu};
 use crate::math::{rng, triangle_barycentrics};
 use crate::scene::Frame;
 use glam::Vec2;
 use rand::Rng;
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Point {
-    pub tri: u32,
-    pub b1: f32,
-    pub b2: f32,
-    pub pad: u32,
+gpu_struct! {
+    /// A point of the set: its triangle and barycentrics (b1, b2).
+    #[derive(Debug, PartialEq)]
+    pub struct Point {
+        pub tri: u32,
+        pub b1: f32,
+        pub b2: f32,
+        pub pad: u32,
+    }
 }
+
+gpu_struct! {
+    /// One pull-push level: its index, where it and its parent start in the pyramid, and
+    /// its tile side.
+    struct Level {
+        level: u32,
+        offset: u32,
+        parent_offset: u32,
+        size: u32,
+    }
+}
+
+pub(crate) const SPLAT: Pass = Pass {
+    name: "ism_splat",
+    wgsl: include_str!("../../shaders/ism_splat.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::COMPUTE,
+        bindings: &[
+            uniform("P", &Params::LAYOUT),
+            read("tris", Elem::Struct(&Tri::LAYOUT)),
+            read("points", Elem::Struct(&Point::LAYOUT)),
+            read("vpls", Elem::Struct(&Vpl::LAYOUT)),
+            read("slots", Elem::Plain(8)),
+            read_write("atlas", Elem::Plain(4)),
+        ],
+    }],
+};
+
+pub(crate) const PULL_PUSH: Pass = Pass {
+    name: "ism_pullpush",
+    wgsl: include_str!("../../shaders/ism_pullpush.wgsl"),
+    groups: &[
+        Group {
+            stages: wgpu::ShaderStages::COMPUTE,
+            bindings: &[
+                uniform("P", &Params::LAYOUT),
+                read("atlas", Elem::Plain(4)),
+                read_write("pyramid", Elem::Plain(4)),
+                read("slots", Elem::Plain(8)),
+            ],
+        },
+        Group {
+            stages: wgpu::ShaderStages::COMPUTE,
+            bindings: &[uniform("L", &Level::LAYOUT)],
+        },
+    ],
+};
 
 /// `count` points on `frame`'s surfaces in proportion to area, in random order.
 pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
@@ -51,16 +103,8 @@ pub fn slot_offset(seed: u64, slot: u32, num_points: u32) -> u32 {
     (crate::math::stream_seed(&[seed, slot as u64, 0x5107]) % num_points as u64) as u32
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Level {
-    level: u32,
-    offset: u32,
-    parent_offset: u32,
-    size: u32,
-}
-
 pub struct Ism {
+    clear: wgpu::ComputePipeline,
     splat: wgpu::ComputePipeline,
     decode: wgpu::ComputePipeline,
     pull: wgpu::ComputePipeline,
@@ -68,7 +112,6 @@ pub struct Ism {
     splat_group: wgpu::BindGroup,
     pp_group: wgpu::BindGroup,
     level_groups: Vec<wgpu::BindGroup>,
-    atlas: wgpu::Buffer,
     /// Level 0 of the pyramid is the filled atlas the gather reads.
     pub pyramid: wgpu::Buffer,
     size: u32,
@@ -78,7 +121,7 @@ pub struct Ism {
 
 /// Bytes of the atlas for `max_vpls` tiles of `size`^2.
 pub fn atlas_bytes(max_vpls: u32, size: u32) -> u64 {
-    max_vpls as u64 * size as u64 * size as u64 * 4
+    bytes::<u32>(max_vpls as u64 * size as u64 * size as u64)
 }
 
 impl Ism {
@@ -89,7 +132,7 @@ impl Ism {
         tris: &wgpu::Buffer,
         points: &wgpu::Buffer,
         vpls: &wgpu::Buffer,
-        offsets: &wgpu::Buffer,
+        slots: &wgpu::Buffer,
         max_vpls: u32,
         size: u32,
         levels: u32,
@@ -110,67 +153,48 @@ impl Ism {
         );
         let pyramid = gpu.buffer(
             "ism pyramid",
-            offsets_l[levels as usize + 1] * 4,
+            bytes::<f32>(offsets_l[levels as usize + 1]),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
-        let m_splat = gpu.shader("ism_splat", include_str!("../../shaders/ism_splat.wgsl"));
-        let l_splat = gpu.layout(
-            "ism_splat",
+        let m_splat = SPLAT.module(gpu);
+        let l_splat = SPLAT.layouts(gpu);
+        let splat = gpu.compute_pipeline(SPLAT.name, &m_splat, "main", &[&l_splat[0]]);
+        let clear = gpu.compute_pipeline("ism clear", &m_splat, "clear", &[&l_splat[0]]);
+        let splat_group = SPLAT.groups[0].bind(
+            gpu,
+            SPLAT.name,
+            &l_splat[0],
             &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, true),
-                storage_entry(3, true),
-                storage_entry(4, true),
-                storage_entry(5, false),
+                ("P", params.as_entire_binding()),
+                ("tris", tris.as_entire_binding()),
+                ("points", points.as_entire_binding()),
+                ("vpls", vpls.as_entire_binding()),
+                ("slots", slots.as_entire_binding()),
+                ("atlas", atlas.as_entire_binding()),
             ],
         );
-        let splat = gpu.compute_pipeline("ism_splat", &m_splat, "main", &[&l_splat]);
-        let splat_group = gpu.bind(
-            "ism_splat",
-            &l_splat,
+        let m_pp = PULL_PUSH.module(gpu);
+        let l = PULL_PUSH.layouts(gpu);
+        let (l_pp, l_level) = (&l[0], &l[1]);
+        let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[l_pp, l_level]);
+        let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[l_pp, l_level]);
+        let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[l_pp, l_level]);
+        let pp_group = PULL_PUSH.groups[0].bind(
+            gpu,
+            PULL_PUSH.name,
+            l_pp,
             &[
-                params.as_entire_binding(),
-                tris.as_entire_binding(),
-                points.as_entire_binding(),
-                vpls.as_entire_binding(),
-                offsets.as_entire_binding(),
-                atlas.as_entire_binding(),
-            ],
-        );
-        let m_pp = gpu.shader(
-            "ism_pullpush",
-            include_str!("../../shaders/ism_pullpush.wgsl"),
-        );
-        let l_pp = gpu.layout(
-            "ism_pullpush",
-            &[
-                uniform_entry(0, wgpu::ShaderStages::COMPUTE, false),
-                storage_entry(1, true),
-                storage_entry(2, false),
-            ],
-        );
-        let l_level = gpu.layout(
-            "ism level",
-            &[uniform_entry(0, wgpu::ShaderStages::COMPUTE, false)],
-        );
-        let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[&l_pp, &l_level]);
-        let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[&l_pp, &l_level]);
-        let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[&l_pp, &l_level]);
-        let pp_group = gpu.bind(
-            "ism_pullpush",
-            &l_pp,
-            &[
-                params.as_entire_binding(),
-                atlas.as_entire_binding(),
-                pyramid.as_entire_binding(),
+                ("P", params.as_entire_binding()),
+                ("atlas", atlas.as_entire_binding()),
+                ("pyramid", pyramid.as_entire_binding()),
+                ("slots", slots.as_entire_binding()),
             ],
         );
         let level_groups = (0..=levels)
             .map(|l| {
                 let u = gpu.buffer(
                     "ism level",
-                    16,
+                    std::mem::size_of::<Level>() as u64,
                     wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 );
                 let lv = Level {
@@ -180,10 +204,11 @@ impl Ism {
                     size: size >> l,
                 };
                 gpu.queue.write_buffer(&u, 0, bytemuck::bytes_of(&lv));
-                gpu.bind("ism level", &l_level, &[u.as_entire_binding()])
+                PULL_PUSH.groups[1].bind(gpu, "ism level", l_level, &[("L", u.as_entire_binding())])
             })
             .collect();
         Ism {
+            clear,
             splat,
             decode,
             pull,
@@ -191,7 +216,6 @@ impl Ism {
             splat_group,
             pp_group,
             level_groups,
-            atlas,
             pyramid,
             size,
             levels,
@@ -199,24 +223,37 @@ impl Ism {
         }
     }
 
-    /// Clears the atlas and splats every slot's points.
-    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32, points_per_vpl: u32) {
-        debug_assert!(num_vpls <= self.max_vpls);
-        enc.clear_buffer(&self.atlas, 0, None);
-        if num_vpls > 0 {
-            dispatch(
-                enc,
-                "ism splat",
-                &self.splat,
-                &[&self.splat_group],
-                (points_per_vpl.div_ceil(64), num_vpls, 1),
-            );
+    /// Empties the tiles of the first `changed` entries of the slots buffer and splats their
+    /// points; the other tiles are kept.
+    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, changed: u32, points_per_vpl: u32) {
+        debug_assert!(changed <= self.max_vpls);
+        if changed == 0 {
+            return;
         }
+        let (x, y) = groups_1d(changed as u64 * (self.size as u64).pow(2));
+        dispatch(
+            enc,
+            "ism clear",
+            &self.clear,
+            &[&self.splat_group],
+            (x, y, 1),
+        );
+        dispatch(
+            enc,
+            "ism splat",
+            &self.splat,
+            &[&self.splat_group],
+            (points_per_vpl.div_ceil(64), changed, 1),
+        );
     }
 
-    /// Decodes the atlas into the pyramid and fills holes by pull-push.
-    pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, num_vpls: u32) {
-        let texels = |l: u32| num_vpls as u64 * ((self.size >> l) as u64).pow(2);
+    /// Decodes the redrawn tiles of the atlas into the pyramid and fills their holes by
+    /// pull-push.
+    pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, changed: u32) {
+        if changed == 0 {
+            return;
+        }
+        let texels = |l: u32| changed as u64 * ((self.size >> l) as u64).pow(2);
         let g = |n: u64| {
             let (x, y) = groups_1d(n);
             (x, y, 1)

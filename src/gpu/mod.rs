@@ -2,17 +2,21 @@
 //! `shaders/`: `gbuffer`, `ism` (splat and pull-push), `gather`, `shadow` and `direct`,
 //! `compose` (emission, sum, exposure and sRGB). `renderer` runs them in order for a frame.
 
+pub(crate) mod bindings;
+mod common;
 pub mod compose;
 pub mod direct;
 pub mod gather;
 pub mod gbuffer;
 pub mod ism;
+pub mod profile;
 pub mod renderer;
 pub mod shadow;
 
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
+pub use profile::Profiling;
 pub use renderer::{GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.
@@ -191,6 +195,7 @@ impl Gpu {
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("irad"),
             required_limits: limits.clone(),
+            required_features: adapter.features() & profile::TIMESTAMP_FEATURES,
             ..Default::default()
         }))
         .map_err(|e| anyhow!("cannot open a device on {}: {e}", adapter.get_info().name))?;
@@ -269,55 +274,6 @@ pub fn check_size(limits: &wgpu::Limits, what: &str, bytes: u64, hint: &str) -> 
     Ok(())
 }
 
-/// Layout entry of a storage buffer visible to compute shaders.
-pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// Layout entry of a uniform buffer.
-pub(crate) fn uniform_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    dynamic: bool,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-/// Layout entry of an unsigned-integer texture read with textureLoad in compute.
-pub(crate) fn texture_entry(
-    binding: u32,
-    dim: wgpu::TextureViewDimension,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Uint,
-            view_dimension: dim,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
 impl Gpu {
     pub fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -325,39 +281,6 @@ impl Gpu {
             size: size.max(16).next_multiple_of(16),
             usage,
             mapped_at_creation: false,
-        })
-    }
-
-    pub(crate) fn layout(
-        &self,
-        label: &str,
-        entries: &[wgpu::BindGroupLayoutEntry],
-    ) -> wgpu::BindGroupLayout {
-        self.device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some(label),
-                entries,
-            })
-    }
-
-    pub(crate) fn bind(
-        &self,
-        label: &str,
-        layout: &wgpu::BindGroupLayout,
-        resources: &[wgpu::BindingResource],
-    ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = resources
-            .iter()
-            .enumerate()
-            .map(|(i, r)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: r.clone(),
-            })
-            .collect();
-        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(label),
-            layout,
-            entries: &entries,
         })
     }
 
@@ -405,7 +328,7 @@ impl Gpu {
                 bind_group_layouts: &[Some(layout)],
                 immediate_size: 0,
             });
-        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
+        let attributes = gbuffer::Vertex::ATTRIBUTES;
         self.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -415,7 +338,7 @@ impl Gpu {
                     entry_point: Some("vs"),
                     compilation_options: Default::default(),
                     buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 16,
+                        array_stride: std::mem::size_of::<gbuffer::Vertex>() as u64,
                         step_mode: wgpu::VertexStepMode::Vertex,
                         attributes: &attributes,
                     })],
@@ -483,20 +406,18 @@ pub(crate) struct PixelPass {
 }
 
 impl PixelPass {
-    /// `entries[i]` describes `resources[i]` at binding i.
+    /// The pass `pass` (one bind group) over `resources`, named as in its table.
     pub(crate) fn new(
         gpu: &Gpu,
-        label: &'static str,
-        wgsl: &str,
-        entries: &[wgpu::BindGroupLayoutEntry],
-        resources: &[wgpu::BindingResource],
+        pass: &'static bindings::Pass,
+        resources: &[(&str, wgpu::BindingResource)],
     ) -> Self {
-        let module = gpu.shader(label, wgsl);
-        let layout = gpu.layout(label, entries);
+        let module = pass.module(gpu);
+        let layouts = pass.layouts(gpu);
         PixelPass {
-            label,
-            pipeline: gpu.compute_pipeline(label, &module, "main", &[&layout]),
-            group: gpu.bind(label, &layout, resources),
+            label: pass.name,
+            pipeline: gpu.compute_pipeline(pass.name, &module, "main", &[&layouts[0]]),
+            group: pass.groups[0].bind(gpu, pass.name, &layouts[0], resources),
         }
     }
 

@@ -1,7 +1,12 @@
 //! The GPU frame: uploads the frame's triangles, VPLs and emitter samples, runs the passes in
 //! order (G-buffer, shadow hemicubes, direct light, ISM splat, pull-push, gather, compose) and
-//! reads the frame back. Each pass is its own submission, timed to its completion.
+//! reads the frame back, all in one submission (or, profiling without timestamp queries,
+//! one per pass: see `profile`).
 
+use super::bindings::bytes;
+use super::common::{LightSample, Params, Tri, Vpl};
+use super::gbuffer::Vertex;
+use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
 use super::{
     check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer, ism,
     shadow::ShadowMaps, Gpu,
@@ -41,48 +46,6 @@ pub struct RendererConfig {
     pub seed: u64,
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Params {
-    width: u32,
-    height: u32,
-    num_vpls: u32,
-    ism_size: u32,
-    points_per_vpl: u32,
-    num_points: u32,
-    num_light_samples: u32,
-    shadow_size: u32,
-    far: f32,
-    dmin: f32,
-    exposure: f32,
-    ism_bias: f32,
-    cam_pos: [f32; 4],
-    shadow_bias: f32,
-    near: f32,
-    pull_levels: u32,
-    pad: u32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuTri {
-    v: [[f32; 4]; 3],
-    n: [f32; 4],
-    albedo: [f32; 4],
-    emission: [f32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Vec4x3([[f32; 4]; 3]);
-
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Vertex {
-    pos: [f32; 3],
-    tri: u32,
-}
-
 /// What one GPU frame needs besides the renderer's fixed state.
 pub struct GpuFrame<'a> {
     pub frame: &'a Frame,
@@ -100,13 +63,81 @@ pub struct RenderedImage {
     pub ldr: Vec<u8>,
     pub direct: Option<Hdr>,
     pub indirect: Option<Hdr>,
-    /// Seconds per stage, in order.
+    /// Seconds per stage, in order: `upload` (CPU), the passes of [`PASSES`] (GPU times
+    /// with timestamps, wall times when serialized, absent when `Off`), and `readback` (the
+    /// rest of the frame's GPU wait: copies, mapping, and with `Off` the passes too).
     pub timings: Vec<(&'static str, f64)>,
+    /// How the passes were timed.
+    pub profiling: Profiling,
+    /// What was kept from the previous frame.
+    pub reused: Reuse,
+}
+
+/// The passes of a frame, in order, as timings name them.
+pub const PASSES: [&str; 7] = [
+    "gbuffer",
+    "shadow_maps",
+    "direct",
+    "ism_splat",
+    "ism_pullpush",
+    "gather",
+    "compose",
+];
+
+/// What a frame reused from the previous one (for run records).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Reuse {
+    /// The triangles are the same bits as last frame's: not uploaded.
+    pub geometry_kept: bool,
+    /// The emitter samples are the same: not uploaded.
+    pub lights_kept: bool,
+    /// Whether the VPLs were uploaded (any bit of any VPL changed).
+    pub vpls_uploaded: bool,
+    /// The shadow hemicubes were kept (same samples, same geometry).
+    pub shadow_maps_kept: bool,
+    /// VPL slots whose ISM tile was kept (same VPL position and normal, same geometry).
+    pub ism_tiles_kept: u32,
+    /// VPL slots whose ISM tile was splatted and pulled/pushed again.
+    pub ism_tiles_drawn: u32,
+}
+
+/// What the last frame uploaded, to tell what changed.
+#[derive(Default)]
+struct Last {
+    tris: Vec<Tri>,
+    vpls: Vec<Vpl>,
+    lights: Vec<LightSample>,
+}
+
+/// Whether two slices hold the same bits.
+fn same<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
+    bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
+}
+
+/// Buffers the frame's outputs are copied into for reading back.
+struct Staging {
+    hdr: wgpu::Buffer,
+    ldr: wgpu::Buffer,
+    direct: wgpu::Buffer,
+    indirect: wgpu::Buffer,
 }
 
 pub struct Renderer {
     pub gpu: std::sync::Arc<Gpu>,
     pub config: RendererConfig,
+    /// How frames are submitted and timed: timestamps where the adapter has them, else
+    /// serialized (so that run records keep per-pass times); `Off` for the fastest frames.
+    pub profiling: Profiling,
+    timestamps: Option<Timestamps>,
+    staging: Staging,
+    /// Keep what did not change since the last frame (shadow maps, ISM tiles, uploads);
+    /// `false` redraws and uploads everything every frame.
+    pub reuse: bool,
+    last: Last,
+    /// Each slot's offset into the ISM point set.
+    offsets: Vec<u32>,
+    /// (slot, offset) of the slots whose ISM tiles are redrawn this frame.
+    slots: wgpu::Buffer,
     tri_count: usize,
     params: wgpu::Buffer,
     tris: wgpu::Buffer,
@@ -165,7 +196,7 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
     check_size(
         limits,
         "the HDR frame",
-        c.width as u64 * c.height as u64 * 16,
+        bytes::<[f32; 4]>(c.width as u64 * c.height as u64),
         "lower --size",
     )?;
     Ok(())
@@ -188,30 +219,40 @@ impl Renderer {
             std::mem::size_of::<Params>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let tris = gpu.buffer("tris", tri_count as u64 * 96, storage);
+        let tris = gpu.buffer("tris", bytes::<Tri>(tri_count as u64), storage);
         check_size(
             &gpu.limits,
             "the scene's triangles",
-            tri_count as u64 * 96,
+            bytes::<Tri>(tri_count as u64),
             "use a smaller scene",
         )?;
         let vertices = gpu.buffer(
             "vertices",
-            tri_count as u64 * 48,
+            bytes::<Vertex>(tri_count as u64 * 3),
             wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
         );
-        let vpls = gpu.buffer("vpls", c.max_vpls as u64 * 48, storage);
-        let lights = gpu.buffer("lights", c.light_samples as u64 * 48, storage);
+        let vpls = gpu.buffer("vpls", bytes::<Vpl>(c.max_vpls as u64), storage);
+        let lights = gpu.buffer(
+            "lights",
+            bytes::<LightSample>(c.light_samples as u64),
+            storage,
+        );
         let points = ism::point_set(points_frame, c.num_points as usize, c.seed);
-        let points_buf = gpu.buffer("ism points", points.len() as u64 * 16, storage);
+        let points_buf = gpu.buffer(
+            "ism points",
+            bytes::<ism::Point>(points.len() as u64),
+            storage,
+        );
         gpu.queue
             .write_buffer(&points_buf, 0, bytemuck::cast_slice(&points));
         let offsets: Vec<u32> = (0..c.max_vpls)
             .map(|s| ism::slot_offset(c.seed, s, c.num_points))
             .collect();
-        let offsets_buf = gpu.buffer("ism slot offsets", offsets.len() as u64 * 4, storage);
-        gpu.queue
-            .write_buffer(&offsets_buf, 0, bytemuck::cast_slice(&offsets));
+        let slots = gpu.buffer(
+            "ism slots to redraw",
+            bytes::<[u32; 2]>(c.max_vpls as u64),
+            storage,
+        );
         let pixels = c.width as u64 * c.height as u64;
         let gbuffer = GBuffer::new(&gpu, c.width, c.height);
         let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples);
@@ -230,7 +271,7 @@ impl Renderer {
             &tris,
             &points_buf,
             &vpls,
-            &offsets_buf,
+            &slots,
             c.max_vpls,
             c.ism_size,
             c.pull_levels,
@@ -253,9 +294,25 @@ impl Renderer {
             &gather.output,
             pixels,
         );
+        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+        let staging = Staging {
+            hdr: gpu.buffer("hdr readback", bytes::<[f32; 4]>(pixels), read),
+            ldr: gpu.buffer("ldr readback", bytes::<u32>(pixels), read),
+            direct: gpu.buffer("direct readback", bytes::<[f32; 4]>(pixels), read),
+            indirect: gpu.buffer("indirect readback", bytes::<[f32; 4]>(pixels), read),
+        };
+        let timestamps = has_timestamps(&gpu).then(|| Timestamps::new(&gpu, PASSES.len() as u32));
+        let profiling = Profiling::default_for(&gpu);
         Ok(Renderer {
             gpu,
             config,
+            profiling,
+            timestamps,
+            staging,
+            reuse: true,
+            last: Last::default(),
+            offsets,
+            slots,
             tri_count,
             params,
             tris,
@@ -271,9 +328,11 @@ impl Renderer {
         })
     }
 
-    fn upload(&self, input: &GpuFrame, far: f32, near: f32) -> Result<()> {
+    /// Uploads what changed since the last frame; returns the slots whose ISM must be
+    /// redrawn and what was reused.
+    fn upload(&mut self, input: &GpuFrame, far: f32, near: f32) -> Result<(Vec<u32>, Reuse)> {
         let f = input.frame;
-        let c = &self.config;
+        let c = self.config.clone();
         if f.tris.len() != self.tri_count {
             bail!(
                 "the frame has {} triangles but the renderer was built for {}",
@@ -290,6 +349,79 @@ impl Renderer {
                 c.light_samples
             );
         }
+        let q = &self.gpu.queue;
+        let tris: Vec<Tri> = (0..f.tris.len())
+            .map(|i| Tri {
+                v0: f.tris[i][0].extend(1.0).to_array(),
+                v1: f.tris[i][1].extend(1.0).to_array(),
+                v2: f.tris[i][2].extend(1.0).to_array(),
+                n: f.normals[i].extend(0.0).to_array(),
+                albedo: f.albedo(i).extend(0.0).to_array(),
+                emission: f.emission(i).extend(0.0).to_array(),
+            })
+            .collect();
+        let still = self.reuse && same(&self.last.tris, &tris);
+        if !still {
+            q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
+            let verts: Vec<Vertex> = f
+                .tris
+                .iter()
+                .enumerate()
+                .flat_map(|(i, t)| {
+                    t.map(|p| Vertex {
+                        pos: p.to_array(),
+                        tri: i as u32,
+                    })
+                })
+                .collect();
+            q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
+            self.last.tris = tris;
+        }
+        let v4 = |v: Vec3| v.extend(0.0).to_array();
+        let vpls: Vec<Vpl> = input
+            .vpls
+            .iter()
+            .map(|v| Vpl {
+                pos: v4(v.position),
+                normal: v4(v.normal),
+                flux: v4(v.flux),
+            })
+            .collect();
+        // A slot keeps its ISM tile while the geometry is still and its VPL's position and
+        // normal are the same bits as last frame's.
+        let changed: Vec<u32> = (0..vpls.len())
+            .filter(|&s| {
+                let old = self.last.vpls.get(s);
+                !(still && old.is_some_and(|o| o.pos == vpls[s].pos && o.normal == vpls[s].normal))
+            })
+            .map(|s| s as u32)
+            .collect();
+        let vpls_uploaded = !(still && same(&self.last.vpls, &vpls));
+        if vpls_uploaded && !vpls.is_empty() {
+            q.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&vpls));
+        }
+        self.last.vpls = vpls;
+        if !changed.is_empty() {
+            let pairs: Vec<[u32; 2]> = changed
+                .iter()
+                .map(|&s| [s, self.offsets[s as usize]])
+                .collect();
+            q.write_buffer(&self.slots, 0, bytemuck::cast_slice(&pairs));
+        }
+        let lights: Vec<LightSample> = input
+            .lights
+            .iter()
+            .map(|l| LightSample {
+                pos: v4(l.position),
+                normal: v4(l.normal),
+                radiance: v4(l.radiance),
+            })
+            .collect();
+        let lights_same = self.reuse && same(&self.last.lights, &lights);
+        if !lights.is_empty() && !lights_same {
+            q.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
+        }
+        self.last.lights = lights;
         let params = Params {
             width: c.width,
             height: c.height,
@@ -307,49 +439,20 @@ impl Renderer {
             shadow_bias: c.shadow_bias,
             near,
             pull_levels: c.pull_levels,
-            pad: 0,
+            num_changed: changed.len() as u32,
         };
-        let q = &self.gpu.queue;
-        q.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let tris: Vec<GpuTri> = (0..f.tris.len())
-            .map(|i| GpuTri {
-                v: f.tris[i].map(|p| p.extend(1.0).to_array()),
-                n: f.normals[i].extend(0.0).to_array(),
-                albedo: f.albedo(i).extend(0.0).to_array(),
-                emission: f.emission(i).extend(0.0).to_array(),
-            })
-            .collect();
-        q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
-        let verts: Vec<Vertex> = f
-            .tris
-            .iter()
-            .enumerate()
-            .flat_map(|(i, t)| {
-                t.map(|p| Vertex {
-                    pos: p.to_array(),
-                    tri: i as u32,
-                })
-            })
-            .collect();
-        q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
-        let v4 = |v: Vec3| v.extend(0.0).to_array();
-        let vpls: Vec<Vec4x3> = input
-            .vpls
-            .iter()
-            .map(|v| Vec4x3([v4(v.position), v4(v.normal), v4(v.flux)]))
-            .collect();
-        if !vpls.is_empty() {
-            q.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&vpls));
-        }
-        let lights: Vec<Vec4x3> = input
-            .lights
-            .iter()
-            .map(|l| Vec4x3([v4(l.position), v4(l.normal), v4(l.radiance)]))
-            .collect();
-        if !lights.is_empty() {
-            q.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
-        }
-        Ok(())
+        self.gpu
+            .queue
+            .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        let reuse = Reuse {
+            geometry_kept: still,
+            lights_kept: lights_same,
+            vpls_uploaded,
+            shadow_maps_kept: false,
+            ism_tiles_kept: input.vpls.len() as u32 - changed.len() as u32,
+            ism_tiles_drawn: changed.len() as u32,
+        };
+        Ok((changed, reuse))
     }
 
     /// Renders one frame. With `components`, the direct and indirect images come back too.
@@ -357,108 +460,121 @@ impl Renderer {
         let f = input.frame;
         let c = self.config.clone();
         let (lo, hi) = f.bounds();
-        let far = (hi - lo)
-            .length()
-            .max((f.camera.position - (lo + hi) * 0.5).length() * 2.0)
-            * 1.5;
+        // The depth range of the ISMs and hemicubes from the scene alone (every VPL and
+        // emitter sample lies in its bounds), so that kept tiles stay valid while the camera
+        // moves; the camera's covers the scene from wherever the camera is.
+        let far = (hi - lo).length() * 1.5;
         let near = far * 1e-5;
-        let mut timings = Vec::new();
-        let mut t0 = Instant::now();
-        let mut stage =
-            |name: &'static str, gpu: &Gpu, enc: Option<wgpu::CommandEncoder>| -> Result<()> {
-                if let Some(enc) = enc {
-                    gpu.queue.submit([enc.finish()]);
-                }
-                gpu.wait()?;
-                let now = Instant::now();
-                timings.push((name, (now - t0).as_secs_f64()));
-                t0 = now;
-                Ok(())
-            };
-        let encoder = |gpu: &Gpu| gpu.device.create_command_encoder(&Default::default());
-        self.upload(input, far, near)?;
-        stage("upload", &self.gpu, None)?;
+        let cam_far = far.max((f.camera.position - (lo + hi) * 0.5).length() * 3.0);
+        let t_upload = Instant::now();
+        let (changed, mut reuse) = self.upload(input, far, near)?;
+        let upload_s = t_upload.elapsed().as_secs_f64();
         let count = (self.tri_count * 3) as u32;
+        let t_gpu = Instant::now();
+        let mut rec = Recorder::new(&self.gpu, self.profiling, self.timestamps.as_ref());
 
-        let mut enc = encoder(&self.gpu);
-        let view_proj =
-            f.camera.projection(c.width, c.height, near.max(1e-3), far) * f.camera.view();
+        let view_proj = f
+            .camera
+            .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
+            * f.camera.view();
         self.gbuffer
-            .encode(&self.gpu, &mut enc, &self.vertices, count, view_proj);
-        stage("gbuffer", &self.gpu, Some(enc))?;
+            .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
+        rec.end_pass()?;
 
-        let mut enc = encoder(&self.gpu);
         let samples: Vec<(Vec3, Vec3)> = input
             .lights
             .iter()
             .map(|l| (l.position, l.normal))
             .collect();
-        self.shadows.encode(
+        let drawn = self.shadows.encode(
             &self.gpu,
-            &mut enc,
+            &mut rec.enc,
             &samples,
-            near,
-            far,
+            (near, far),
             &self.vertices,
             count,
+            !reuse.geometry_kept,
         );
-        stage("shadow_maps", &self.gpu, Some(enc))?;
+        reuse.shadow_maps_kept = !drawn && !samples.is_empty();
+        rec.end_pass()?;
 
-        let mut enc = encoder(&self.gpu);
-        self.direct.encode(&mut enc, c.width, c.height);
-        stage("direct", &self.gpu, Some(enc))?;
+        self.direct.encode(&mut rec.enc, c.width, c.height);
+        rec.end_pass()?;
 
-        let n = input.vpls.len() as u32;
-        let mut enc = encoder(&self.gpu);
-        self.ism.encode_splat(&mut enc, n, c.points_per_vpl);
-        stage("ism_splat", &self.gpu, Some(enc))?;
+        let n = changed.len() as u32;
+        self.ism.encode_splat(&mut rec.enc, n, c.points_per_vpl);
+        rec.end_pass()?;
 
-        let mut enc = encoder(&self.gpu);
-        if n > 0 {
-            self.ism.encode_pull_push(&mut enc, n);
-        }
-        stage("ism_pullpush", &self.gpu, Some(enc))?;
+        self.ism.encode_pull_push(&mut rec.enc, n);
+        rec.end_pass()?;
 
-        let mut enc = encoder(&self.gpu);
-        self.gather.encode(&mut enc, c.width, c.height);
-        stage("gather", &self.gpu, Some(enc))?;
+        self.gather.encode(&mut rec.enc, c.width, c.height);
+        rec.end_pass()?;
 
-        let mut enc = encoder(&self.gpu);
-        self.compose.encode(&mut enc, c.width, c.height);
-        stage("compose", &self.gpu, Some(enc))?;
+        self.compose.encode(&mut rec.enc, c.width, c.height);
+        rec.end_pass()?;
 
+        // The outputs into the staging buffers, in the same submission.
         let pixels = c.width as u64 * c.height as u64;
-        let read_hdr = |buf: &wgpu::Buffer| -> Result<Hdr> {
-            let bytes = self.gpu.read_buffer(buf, pixels * 16)?;
-            let v: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            Ok(Hdr {
+        let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
+        let st = &self.staging;
+        let mut reads = vec![(&self.compose.hdr, &st.hdr, hdr_bytes)];
+        reads.push((&self.compose.ldr, &st.ldr, ldr_bytes));
+        if components {
+            reads.push((&self.direct.output, &st.direct, hdr_bytes));
+            reads.push((&self.gather.output, &st.indirect, hdr_bytes));
+        }
+        for &(src, dst, size) in &reads {
+            rec.enc.copy_buffer_to_buffer(src, 0, dst, 0, size);
+        }
+        let serialized = std::mem::take(&mut rec.cpu);
+        rec.submit();
+        let mut mapped: Vec<(&wgpu::Buffer, u64)> = reads.iter().map(|r| (r.1, r.2)).collect();
+        let stamped = self.profiling == Profiling::Timestamps && self.timestamps.is_some();
+        if let (true, Some(t)) = (stamped, &self.timestamps) {
+            mapped.push((&t.staging, (PASSES.len() as u64 + 1) * 8));
+        }
+        let mut data = read_mapped(&self.gpu, &mapped)?;
+        let gpu_s = t_gpu.elapsed().as_secs_f64();
+        let pass_s = match (stamped, &self.timestamps) {
+            (true, Some(t)) => {
+                let ticks = data.pop().unwrap_or_default();
+                t.seconds(bytemuck::cast_slice(&ticks))
+            }
+            _ => serialized,
+        };
+        let to_hdr = |bytes: &[u8]| -> Hdr {
+            let v: &[[f32; 4]] = bytemuck::cast_slice(bytes);
+            Hdr {
                 width: c.width,
                 height: c.height,
                 data: v.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
-            })
+            }
         };
-        let hdr = read_hdr(&self.compose.hdr)?;
-        let ldr: Vec<u8> = self
-            .gpu
-            .read_buffer(&self.compose.ldr, pixels * 4)?
+        let hdr = to_hdr(&data[0]);
+        let ldr: Vec<u8> = data[1]
             .chunks_exact(4)
             .flat_map(|p| [p[0], p[1], p[2]])
             .collect();
         let (direct, indirect) = if components {
-            (
-                Some(read_hdr(&self.direct.output)?),
-                Some(read_hdr(&self.gather.output)?),
-            )
+            (Some(to_hdr(&data[2])), Some(to_hdr(&data[3])))
         } else {
             (None, None)
         };
-        stage("readback", &self.gpu, None)?;
+        // Upload (CPU), each pass, then what the frame's GPU work took beyond the passes
+        // (submission, copies, mapping; without per-pass times: all of the GPU work).
+        let mut timings = vec![("upload", upload_s)];
+        timings.extend(PASSES.iter().copied().zip(pass_s.iter().copied()));
+        let in_passes: f64 = pass_s.iter().sum();
+        timings.push(("readback", (gpu_s - in_passes).max(0.0)));
         Ok(RenderedImage {
             hdr,
             ldr,
             direct,
             indirect,
             timings,
+            profiling: self.profiling,
+            reused: reuse,
         })
     }
 }

@@ -2,23 +2,34 @@
 //! (+n, +t, -t, +b, -b) rasterized from the triangles, storing distance to the sample. These
 //! are the accurate shadow maps of the direct light.
 
+use super::bindings::{dynamic_uniform, gpu_struct, Group, Pass};
 use super::{gbuffer, Gpu};
 use glam::Vec3;
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-const STRIDE: u64 = 256;
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Face {
-    pos: [f32; 4],
-    right: [f32; 4],
-    up: [f32; 4],
-    fwd: [f32; 4],
-    near: f32,
-    far: f32,
-    pad: [f32; 2],
+gpu_struct! {
+    /// One hemicube face: the light sample, the face's axes, and the depth range.
+    struct Face {
+        pos: [f32; 4],
+        right: [f32; 4],
+        up: [f32; 4],
+        fwd: [f32; 4],
+        near: f32,
+        far: f32,
+        pad0: f32,
+        pad1: f32,
+    }
 }
+
+pub(crate) const PASS: Pass = Pass {
+    name: "shadow",
+    wgsl: include_str!("../../shaders/shadow.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::VERTEX,
+        bindings: &[dynamic_uniform("F", &Face::LAYOUT)],
+    }],
+};
 
 /// (right, up, forward) of the five hemicube faces around `n`; must match `face_coords` in
 /// `shaders/direct.wgsl`.
@@ -35,31 +46,31 @@ pub struct ShadowMaps {
     pub array_view: wgpu::TextureView,
     depth: wgpu::TextureView,
     pub size: u32,
+    /// Bytes from one face's uniform to the next (the adapter's offset alignment).
+    stride: u64,
+    /// The faces last drawn.
+    last: Option<Vec<u8>>,
 }
 
 impl ShadowMaps {
     pub fn new(gpu: &Gpu, size: u32, samples: u32) -> Self {
-        let module = gpu.shader("shadow", include_str!("../../shaders/shadow.wgsl"));
-        let layout = gpu.layout(
-            "shadow",
-            &[super::uniform_entry(0, wgpu::ShaderStages::VERTEX, true)],
-        );
-        let pipeline = gpu.raster_pipeline("shadow", &module, &layout, FORMAT);
+        let module = PASS.module(gpu);
+        let layout = PASS.groups[0].layout(gpu, PASS.name);
+        let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
         let n = (samples * 5).max(1);
+        let stride = (std::mem::size_of::<Face>() as u64)
+            .next_multiple_of(gpu.limits.min_uniform_buffer_offset_alignment as u64);
         let uniform = gpu.buffer(
             "shadow faces",
-            STRIDE * n as u64,
+            stride * n as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = gpu.bind(
-            "shadow",
-            &layout,
-            &[wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &uniform,
-                offset: 0,
-                size: wgpu::BufferSize::new(std::mem::size_of::<Face>() as u64),
-            })],
-        );
+        let face = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &uniform,
+            offset: 0,
+            size: wgpu::BufferSize::new(std::mem::size_of::<Face>() as u64),
+        });
+        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &[("F", face)]);
         let tex = gbuffer::target(gpu, "shadow maps", size, size, n, FORMAT, true);
         let layers = (0..n)
             .map(|l| {
@@ -93,22 +104,26 @@ impl ShadowMaps {
             array_view,
             depth,
             size,
+            stride,
+            last: None,
         }
     }
 
-    /// Renders the hemicubes of `samples` (position, normal).
+    /// Renders the hemicubes of `samples` (position, normal) with depth range `(near, far)`,
+    /// unless they are the ones last drawn and the geometry did not move. Returns whether it
+    /// drew.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
-        &self,
+        &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         samples: &[(Vec3, Vec3)],
-        near: f32,
-        far: f32,
+        (near, far): (f32, f32),
         vertices: &wgpu::Buffer,
         count: u32,
-    ) {
-        let mut bytes = vec![0u8; (STRIDE as usize) * samples.len() * 5];
+        geometry_moved: bool,
+    ) -> bool {
+        let mut bytes = vec![0u8; (self.stride as usize) * samples.len() * 5];
         for (j, &(p, n)) in samples.iter().enumerate() {
             for (k, (r, u, f)) in face_bases(n).into_iter().enumerate() {
                 let face = Face {
@@ -118,15 +133,16 @@ impl ShadowMaps {
                     fwd: f.extend(0.0).to_array(),
                     near,
                     far,
-                    pad: [0.0; 2],
+                    pad0: 0.0,
+                    pad1: 0.0,
                 };
-                let o = (j * 5 + k) * STRIDE as usize;
+                let o = (j * 5 + k) * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Face>()]
                     .copy_from_slice(bytemuck::bytes_of(&face));
             }
         }
-        if bytes.is_empty() {
-            return;
+        if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
+            return false;
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
         for l in 0..samples.len() * 5 {
@@ -135,12 +151,14 @@ impl ShadowMaps {
                 "shadow face",
                 &self.pipeline,
                 &self.bind_group,
-                &[(l as u64 * STRIDE) as u32],
+                &[(l as u64 * self.stride) as u32],
                 &self.layers[l],
                 &self.depth,
                 vertices,
                 count,
             );
         }
+        self.last = Some(bytes);
+        true
     }
 }

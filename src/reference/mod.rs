@@ -137,8 +137,18 @@ mod tests {
         };
         let img = render(&f, &tr, &s, &|| {});
         let mean = img.mean();
+        let worst = img
+            .data
+            .iter()
+            .map(|p| (*p - Vec3::splat(2.0)).abs().max_element() / 2.0)
+            .fold(0.0f32, f32::max);
+        println!(
+            "furnace: mean rel err {}, worst pixel rel err {worst}",
+            (mean - Vec3::splat(2.0)).abs().max_element() / 2.0
+        );
+        // Measured: the mean is off by 0.00061 (relative), the worst pixel by 0.0188.
         assert!(
-            (mean - Vec3::splat(2.0)).abs().max_element() < 0.02 * 2.0,
+            (mean - Vec3::splat(2.0)).abs().max_element() < 0.0009 * 2.0,
             "mean {mean}"
         );
         // Every pixel within 2% (4096 spp each: the standard error is about 0.6%).
@@ -150,8 +160,9 @@ mod tests {
         }
     }
 
+    /// Determinism: the same seed gives a bit-identical image; another seed another one.
     #[test]
-    fn same_seed_same_image() {
+    fn same_seed_same_image_other_seed_other_image() {
         let scene = builtin::load("cornell").unwrap().unwrap();
         let f = scene.at(0.0);
         let tr = Tracer::new(&f);
@@ -161,6 +172,23 @@ mod tests {
             spp: 4,
             seed: 5,
         };
-        assert_eq!(render(&f, &tr, &s, &|| {}), render(&f, &tr, &s, &|| {}));
+        let bits = |img: &Hdr| -> Vec<u32> {
+            img.data
+                .iter()
+                .flat_map(|c| c.to_array().map(f32::to_bits))
+                .collect()
+        };
+        let a = render(&f, &tr, &s, &|| {});
+        assert_eq!(bits(&a), bits(&render(&f, &tr, &s, &|| {})));
+        let other = render(&f, &tr, &Params { seed: 6, ..s }, &|| {});
+        let changed = a
+            .data
+            .iter()
+            .zip(&other.data)
+            .filter(|(p, q)| p != q)
+            .count();
+        println!("seed 6 changes {changed} of {} pixels", a.data.len());
+        // Measured 63 of 64.
+        assert!(changed > 42, "seed 6 changes only {changed} of 64 pixels");
     }
 }

@@ -64,15 +64,9 @@ fn clips(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<Vec<html::
     Ok(clips)
 }
 
-/// Writes every output of the comparison and prints its table.
-pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
-    let cfg = &plan.cfg;
+/// metrics.csv: one row per run and frame.
+fn write_csv(plan: &Plan, results: &Results) -> Result<()> {
     let spec = plan.spec.as_str();
-    let frames = plan.frames;
-    let numbers = &plan.numbers;
-    let adapter = &results.adapter;
-    let clips = clips(plan, reference, results)?;
-    // Tables.
     let mut csv = String::from(
         "scene,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flip,flicker,replaced,acceptance\n",
     );
@@ -96,19 +90,26 @@ pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
             );
         }
     }
-    write_bytes(&cfg.out.join("metrics.csv"), csv.as_bytes())?;
-    let notes = vec![
+    write_bytes(&plan.cfg.out.join("metrics.csv"), csv.as_bytes())?;
+    Ok(())
+}
+
+/// What the page, metrics.json and stdout say about the comparison's setting.
+fn notes(plan: &Plan, results: &Results) -> Vec<String> {
+    let cfg = &plan.cfg;
+    let (spec, frames, adapter) = (&plan.spec, plan.frames, &results.adapter);
+    vec![
         format!("scene {spec}, frames {}..{} at {} fps, {}", frames.start, frames.end, cfg.sequence.fps, cfg.sequence.size),
         format!("reference: CPU path tracer, {} spp, seed {}", cfg.spp, cfg.sequence.seed),
         format!("adapter: {adapter}; CPU threads: {}", rayon::current_num_threads()),
         format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference)", cfg.render.mh_rate, cfg.render.mh_escape),
-    ];
-    crate::report::write_json(
-        &cfg.out.join("metrics.json"),
-        &serde_json::json!({ "scene": spec, "size": cfg.sequence.size.to_string(), "frames": numbers, "spp": cfg.spp, "notes": notes, "runs": results.records }),
-    )?;
+    ]
+}
 
-    // Charts.
+/// The charts, written as SVG and PNG under charts/; returns (title, SVG) for the page.
+fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>> {
+    let cfg = &plan.cfg;
+    let numbers = &plan.numbers;
     let per_frame = |f: &dyn Fn(&RunRecord, usize) -> Option<f64>| -> Vec<Series> {
         results
             .records
@@ -206,7 +207,12 @@ pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
         })?;
         svgs.push((c.title.to_string(), svg));
     }
-    let rows: Vec<html::Row> = results
+    Ok(svgs)
+}
+
+/// The summary table's rows, one per run.
+fn rows(results: &Results) -> Vec<html::Row> {
+    results
         .records
         .iter()
         .map(|r| html::Row {
@@ -218,22 +224,18 @@ pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
             replaced: r.mean_replaced,
             acceptance: r.mean_acceptance,
         })
-        .collect();
-    let page = html::page(
-        &format!("irad compare: {spec}"),
-        &notes,
-        &rows,
-        &svgs,
-        &clips,
-    );
-    write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
+        .collect()
+}
 
+/// Prints the setting and the summary table.
+fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row]) {
+    let cfg = &plan.cfg;
     println!("{}", notes.join("\n"));
     println!(
         "{:14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10}",
         "run", "s/frame", "relMSE", "FLIP", "flicker", "replaced", "accept"
     );
-    for r in &rows {
+    for r in rows {
         println!(
             "{:14} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.3} {:>10}",
             r.label,
@@ -251,5 +253,31 @@ pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
         "wrote {}/report.html, metrics.csv, metrics.json, charts/",
         cfg.out.display()
     );
+}
+
+/// Writes every output of the comparison and prints its table.
+pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
+    let cfg = &plan.cfg;
+    let spec = plan.spec.as_str();
+    let clips = clips(plan, reference, results)?;
+    write_csv(plan, results)?;
+    let notes = notes(plan, results);
+    crate::report::write_json(
+        &cfg.out.join("metrics.json"),
+        &serde_json::json!({ "scene": spec, "size": cfg.sequence.size.to_string(), "frames": plan.numbers, "spp": cfg.spp, "notes": notes, "runs": results.records }),
+    )?;
+
+    let svgs = write_charts(plan, results)?;
+    let rows = rows(results);
+    let page = html::page(
+        &format!("irad compare: {spec}"),
+        &notes,
+        &rows,
+        &svgs,
+        &clips,
+    );
+    write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
+
+    print_table(plan, &notes, &rows);
     Ok(())
 }

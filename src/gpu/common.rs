@@ -1,0 +1,58 @@
+//! The Rust twins of the structs in `shaders/common.wgsl`, which every pass shares. Their
+//! layouts are checked against the WGSL in `bindings`' test.
+
+use super::bindings::gpu_struct;
+
+gpu_struct! {
+    /// Frame constants, the same uniform buffer for every compute pass.
+    pub(crate) struct Params {
+        pub width: u32,
+        pub height: u32,
+        pub num_vpls: u32,
+        pub ism_size: u32,
+        pub points_per_vpl: u32,
+        pub num_points: u32,
+        pub num_light_samples: u32,
+        pub shadow_size: u32,
+        pub far: f32,
+        pub dmin: f32,
+        pub exposure: f32,
+        pub ism_bias: f32,
+        pub cam_pos: [f32; 4],
+        pub shadow_bias: f32,
+        pub near: f32,
+        pub pull_levels: u32,
+        /// ISM slots redrawn this frame (the first entries of the slots buffer).
+        pub num_changed: u32,
+    }
+}
+
+gpu_struct! {
+    /// One scene triangle: vertices, unit geometric normal, albedo and emitted radiance.
+    pub(crate) struct Tri {
+        pub v0: [f32; 4],
+        pub v1: [f32; 4],
+        pub v2: [f32; 4],
+        pub n: [f32; 4],
+        pub albedo: [f32; 4],
+        pub emission: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// A VPL: position, unit normal and weighted flux.
+    pub(crate) struct Vpl {
+        pub pos: [f32; 4],
+        pub normal: [f32; 4],
+        pub flux: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// An emitter sample: position, unit normal and `Le / (pdf * count)`.
+    pub(crate) struct LightSample {
+        pub pos: [f32; 4],
+        pub normal: [f32; 4],
+        pub radiance: [f32; 4],
+    }
+}
