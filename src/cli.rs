@@ -47,8 +47,11 @@ pub enum Command {
         #[arg(long, value_enum, default_value_t = config::Render::default().backend)]
         backend: crate::gpu::BackendChoice,
     },
-    /// List the built-in scenes and what each stresses
+    /// List the built-in scenes and what each stresses, or inspect one scene
     Scenes {
+        /// A built-in scene name or a .gltf/.glb path: print its triangles, emitters and their
+        /// power, cameras, animation, bounds and the loader's warnings
+        scene: Option<String>,
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
         #[arg(long)]
         generate: Option<PathBuf>,
@@ -94,7 +97,9 @@ pub fn run(cli: Cli) -> Result<()> {
             }
         }
         Command::Info { backend } => commands::info(backend),
-        Command::Scenes { generate } => commands::scenes(generate.as_deref()),
+        Command::Scenes { scene, generate } => {
+            commands::scenes(scene.as_deref(), generate.as_deref())
+        }
     }
 }
 
