@@ -48,36 +48,6 @@ fn source_hash(spec: &str) -> u64 {
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_cache_folder_follows_the_scene_source_and_settings() {
-        let dir_of = |spec: &str, spp: u32| {
-            let mut c = config::Compare::default();
-            c.spp = spp;
-            dir(&c, spec)
-        };
-        let root = std::env::temp_dir().join(format!("irad-cache-{}", std::process::id()));
-        let (a, b) = (root.join("a"), root.join("b"));
-        std::fs::create_dir_all(&a).unwrap();
-        std::fs::create_dir_all(&b).unwrap();
-        let (fa, fb) = (a.join("scene.gltf"), b.join("scene.gltf"));
-        std::fs::write(&fa, "one").unwrap();
-        std::fs::write(&fb, "two").unwrap();
-        let (sa, sb) = (fa.to_str().unwrap(), fb.to_str().unwrap());
-        assert_ne!(dir_of(sa, 256), dir_of(sb, 256), "same name, other file");
-        let before = dir_of(sa, 256);
-        std::fs::write(&fa, "one, edited").unwrap();
-        assert_ne!(dir_of(sa, 256), before, "edited file");
-        assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
-        assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
-        assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
-        std::fs::remove_dir_all(&root).unwrap();
-    }
-}
-
 fn cached(plan: &Plan, f: u32) -> PathBuf {
     plan.cache
         .join(format!("{}.exr", crate::report::frame_stem(f)))
@@ -138,4 +108,36 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>>
         .into_iter()
         .map(|i| i.unwrap_or_else(|| traced.next().expect("one traced per missing")))
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cache_folder_follows_the_scene_source_and_settings() {
+        let dir_of = |spec: &str, spp: u32| {
+            let c = config::Compare {
+                spp,
+                ..Default::default()
+            };
+            dir(&c, spec)
+        };
+        let root = std::env::temp_dir().join(format!("irad-cache-{}", std::process::id()));
+        let (a, b) = (root.join("a"), root.join("b"));
+        std::fs::create_dir_all(&a).unwrap();
+        std::fs::create_dir_all(&b).unwrap();
+        let (fa, fb) = (a.join("scene.gltf"), b.join("scene.gltf"));
+        std::fs::write(&fa, "one").unwrap();
+        std::fs::write(&fb, "two").unwrap();
+        let (sa, sb) = (fa.to_str().unwrap(), fb.to_str().unwrap());
+        assert_ne!(dir_of(sa, 256), dir_of(sb, 256), "same name, other file");
+        let before = dir_of(sa, 256);
+        std::fs::write(&fa, "one, edited").unwrap();
+        assert_ne!(dir_of(sa, 256), before, "edited file");
+        assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
+        assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
+        assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 }
