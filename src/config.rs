@@ -367,6 +367,11 @@ pub fn check_exposure(exposure: f32) -> Result<()> {
 pub struct Render {
     #[command(flatten)]
     pub sequence: Sequence,
+    /// Global-illumination method: instant radiosity (VPLs), or a classical radiosity solver
+    /// whose view-independent solution gives the indirect light (kept while geometry and
+    /// lights are still)
+    #[arg(long, value_enum, default_value_t = Render::default().method)]
+    pub method: crate::radiosity::Method,
     /// VPL slots per frame
     #[arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true)]
     pub vpls: u32,
@@ -431,6 +436,7 @@ impl Default for Render {
     fn default() -> Self {
         Render {
             sequence: Sequence::default(),
+            method: crate::radiosity::Method::Instant,
             vpls: 256,
             clamp: None,
             sampler: SamplerConfig::default(),
@@ -489,6 +495,18 @@ impl Render {
             let (lo, hi) = scene.at(0.0).bounds();
             0.02 * (hi - lo).length()
         })
+    }
+
+    /// The classical solver's settings for `scene` (element size from its size).
+    pub fn radiosity_settings(&self, scene: &Scene) -> crate::radiosity::Settings {
+        let (lo, hi) = scene.at(0.0).bounds();
+        crate::radiosity::Settings {
+            method: self.method,
+            // 0.15 in the Cornell box, whose bounding-box diagonal is 3.46.
+            element_size: 0.0433 * (hi - lo).length(),
+            seed: self.sequence.seed,
+            ..Default::default()
+        }
     }
 
     /// The sampler's parameters for `scene`.
@@ -555,6 +573,10 @@ impl Reference {
 pub struct Compare {
     #[command(flatten)]
     pub sequence: Sequence,
+    /// Methods to compare: instant (every sampler x VPL count) and classical radiosity
+    /// solvers (progressive, hierarchical, stochastic: one run each)
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().methods)]
+    pub methods: Vec<crate::radiosity::Method>,
     /// Samplers to compare
     #[arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().samplers)]
     pub samplers: Vec<SamplerKind>,
@@ -628,6 +650,7 @@ impl Default for Compare {
     fn default() -> Self {
         Compare {
             sequence: Sequence::default(),
+            methods: vec![crate::radiosity::Method::Instant],
             samplers: vec![SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh],
             vpls: vec![64, 256, 1024],
             spp: 256,
@@ -645,6 +668,7 @@ impl Compare {
         let r = &self.render;
         Render {
             sequence: self.sequence.clone(),
+            method: crate::radiosity::Method::Instant,
             vpls,
             clamp: r.clamp,
             sampler: SamplerConfig {
@@ -673,6 +697,9 @@ impl Compare {
 
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
+        if self.methods.is_empty() {
+            bail!("--methods needs at least one method");
+        }
         if self.samplers.is_empty() {
             bail!("--samplers needs at least one sampler");
         }

@@ -1,7 +1,9 @@
 //! One frame, in order (DESIGN.md "One frame, in order"): the whole flow in [`Pipeline::render_frame`].
 
 use crate::config;
+use crate::gpu::radiosity::RadiosityPass;
 use crate::gpu::{Gpu, GpuFrame, RenderedImage, Renderer};
+use crate::radiosity::{self, Method};
 use crate::scene::Scene;
 use crate::trace::Tracer;
 pub use crate::vpl::sampler::SamplerKind;
@@ -25,12 +27,17 @@ pub struct FrameOutput {
     /// Seconds per stage, CPU stages then GPU passes, in order.
     pub stages: Vec<(&'static str, f64)>,
     pub seconds: f64,
+    /// A classical method's solver: whether this frame solved (else it reused the last
+    /// solution); None for instant radiosity.
+    pub solved: Option<bool>,
 }
 
 /// The renderer of one sequence: scene, ray tracer, sampler state and GPU passes, on a
 /// device it shares with the process's other pipelines.
 pub struct Pipeline {
     pub scene: Scene,
+    /// A classical radiosity method's solver state, when `--method` names one.
+    classical: Option<Classical>,
     /// The sampler's parameters (seed, distance clamp, sizes) for this scene.
     pub params: SamplerParams,
     pub fps: f32,
@@ -50,7 +57,19 @@ impl Pipeline {
         let tracer = Tracer::new(&frame0);
         let params = cfg.sampler_params(&scene);
         let sampler = Sampler::new(params.clone());
+        let classical = (cfg.method != Method::Instant).then(|| Classical {
+            gpu: renderer.gpu.clone(),
+            settings: cfg.radiosity_settings(&scene),
+            cache: radiosity::Cache::default(),
+            pass: RadiosityPass::new(
+                &renderer.gpu,
+                cfg.sequence.size.width,
+                cfg.sequence.size.height,
+            ),
+            exposure: cfg.exposure,
+        });
         Ok(Pipeline {
+            classical,
             scene,
             params,
             fps: cfg.sequence.fps,
@@ -74,10 +93,16 @@ impl Pipeline {
         self.tracer.update(&frame);
         lap(&mut stages, "bvh", &mut t);
         // 3-6. Camera points, light paths, importance and the sampler: the frame's VPLs and
-        // their weights.
-        let selection = self.sampler.select(&frame, &self.tracer, f as u64);
-        stages.push(("importance", selection.importance_s));
-        stages.push(("vpls", t.elapsed().as_secs_f64() - selection.importance_s));
+        // their weights (none for a classical method: its solution gives the indirect light).
+        let selection = if self.classical.is_some() {
+            Selection::default()
+        } else {
+            self.sampler.select(&frame, &self.tracer, f as u64)
+        };
+        if self.classical.is_none() {
+            stages.push(("importance", selection.importance_s));
+            stages.push(("vpls", t.elapsed().as_secs_f64() - selection.importance_s));
+        }
         t = Instant::now();
         // Emitter samples for direct light (a fixed stream: still scenes get still direct light).
         let lights = frame.emitter_samples(s.seed, self.renderer.config.light_samples as usize);
@@ -93,6 +118,14 @@ impl Pipeline {
             components,
         )?;
         stages.extend(image.timings.iter().map(|&(n, t)| (n, t)));
+        let (image, solved) = match &mut self.classical {
+            Some(c) => {
+                let (image, solved) =
+                    c.add_indirect(image, &frame, &self.tracer, components, &mut stages)?;
+                (image, Some(solved))
+            }
+            None => (image, None),
+        };
         Ok(FrameOutput {
             index: f,
             time: frame.time,
@@ -100,6 +133,50 @@ impl Pipeline {
             selection,
             stages,
             seconds: start.elapsed().as_secs_f64(),
+            solved,
         })
+    }
+}
+
+/// A classical radiosity method in the frame: the solution, kept while the geometry and the
+/// emitters are still, gives the indirect light; the GPU's passes give emission and direct
+/// light as for instant radiosity (with no VPLs).
+struct Classical {
+    gpu: Arc<Gpu>,
+    settings: radiosity::Settings,
+    cache: radiosity::Cache,
+    pass: RadiosityPass,
+    exposure: f32,
+}
+
+impl Classical {
+    /// Solves if the scene changed, rasterizes the solution's indirect part (Gouraud) on the
+    /// GPU and adds it to the frame's emission and direct light.
+    fn add_indirect(
+        &mut self,
+        mut image: RenderedImage,
+        frame: &crate::scene::Frame,
+        tracer: &Tracer,
+        components: bool,
+        stages: &mut Vec<(&'static str, f64)>,
+    ) -> Result<(RenderedImage, bool)> {
+        let mut t = Instant::now();
+        let (solution, solved) = self.cache.get(frame, tracer, &self.settings);
+        if solved {
+            let shaded =
+                radiosity::display::Shaded::new(frame, solution, radiosity::Part::Indirect);
+            self.pass.upload(&self.gpu, &shaded);
+        }
+        lap(stages, "radiosity_solve", &mut t);
+        let indirect = self.pass.render(&self.gpu, frame)?;
+        for (o, i) in image.hdr.data.iter_mut().zip(&indirect.data) {
+            *o += *i;
+        }
+        image.ldr = image.hdr.to_srgb8(self.exposure);
+        if components {
+            image.indirect = Some(indirect);
+        }
+        lap(stages, "radiosity_display", &mut t);
+        Ok((image, solved))
     }
 }

@@ -188,6 +188,10 @@ fn a_comparison_opens_one_device_for_all_its_runs() {
         irad::vpl::sampler::SamplerKind::Mh,
     ];
     cfg.vpls = vec![4, 8];
+    cfg.methods = vec![
+        irad::radiosity::Method::Instant,
+        irad::radiosity::Method::Stochastic,
+    ];
     cfg.spp = 2;
     cfg.out = out.join("report");
     cfg.cache = out.join("cache");
@@ -201,6 +205,56 @@ fn a_comparison_opens_one_device_for_all_its_runs() {
     assert_eq!(irad::gpu::devices_opened() - before, 1);
     let m: serde_json::Value =
         serde_json::from_slice(&std::fs::read(cfg.out.join("metrics.json")).unwrap()).unwrap();
-    assert_eq!(m["runs"].as_array().unwrap().len(), 4);
+    // 2 samplers x 2 VPL counts, and one stochastic radiosity run.
+    let runs = m["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 5);
+    assert_eq!(runs[4]["method"], "stochastic");
+    let csv = std::fs::read_to_string(cfg.out.join("metrics.csv")).unwrap();
+    assert_eq!(
+        csv.lines().filter(|l| l.contains(",stochastic,")).count(),
+        2
+    );
     std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// `--method stochastic` writes the same outputs as instant radiosity; its solution is
+/// solved once while only the camera moves and again in every frame where the light moves.
+#[test]
+fn a_classical_method_renders_the_same_outputs_and_solves_only_when_the_scene_moves() {
+    for (scene, expected) in [
+        ("cornell-orbit", [true, false, false]),
+        ("cornell-light", [true, true, true]),
+    ] {
+        let out = tmp(&format!("method-{scene}"));
+        let r = irad(&[
+            "render",
+            scene,
+            "--method",
+            "stochastic",
+            "--size",
+            "24x24",
+            "--frames",
+            "0..3",
+            "--light-samples",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        assert!(String::from_utf8_lossy(&r.stdout).contains("method stochastic"));
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+        let solved: Vec<bool> = run["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["radiosity_solved"].as_bool().unwrap())
+            .collect();
+        assert_eq!(solved, expected, "{scene}");
+        assert!(out.join("preview.gif").exists() && out.join("frame_0002.exr").exists());
+        let img = irad::image::Hdr::read(&out.join("frame_0001.exr")).unwrap();
+        let m = img.mean();
+        assert!(m.is_finite() && m.x > 0.05, "{scene}: mean {m}");
+        std::fs::remove_dir_all(&out).unwrap();
+    }
 }

@@ -38,6 +38,8 @@ pub struct FrameRecord {
     pub reused: crate::gpu::renderer::Reuse,
     /// How the GPU passes were timed (timestamps, serialized, off).
     pub profiling: crate::gpu::Profiling,
+    /// A classical method: whether this frame solved (else it reused the solution).
+    pub radiosity_solved: Option<bool>,
 }
 
 impl FrameRecord {
@@ -58,6 +60,7 @@ impl FrameRecord {
             rss_mib: report::resident_bytes().map(|b| b as f64 / (1 << 20) as f64),
             reused: fo.image.reused,
             profiling: fo.image.profiling,
+            radiosity_solved: fo.solved,
         }
     }
 }
@@ -172,12 +175,16 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
         },
     )?;
     println!("adapter: {adapter}");
+    let method = match cfg.method {
+        crate::radiosity::Method::Instant => {
+            format!("{} VPLs, sampler {}", cfg.vpls, cfg.sampler.kind)
+        }
+        m => format!("method {}", m.name()),
+    };
     println!(
-        "{} frames of {spec} at {}, {} VPLs, sampler {}",
+        "{} frames of {spec} at {}, {method}",
         frames.len(),
-        cfg.sequence.size,
-        cfg.vpls,
-        cfg.sampler.kind
+        cfg.sequence.size
     );
     means.print();
     println!(

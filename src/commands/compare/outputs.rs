@@ -68,12 +68,13 @@ fn clips(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<Vec<html::
 fn write_csv(plan: &Plan, results: &Results) -> Result<()> {
     let spec = plan.spec.as_str();
     let mut csv = String::from(
-        "scene,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flip,flicker,replaced,acceptance\n",
+        "scene,method,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flip,flicker,replaced,acceptance\n",
     );
     for r in &results.records {
         for (i, fm) in r.metrics.frames.iter().enumerate() {
             csv += &format!(
-                "{spec},{},{},{},{:.6},{:.8},{:.8},{:.8},{:.6},{},{:.4},{}\n",
+                "{spec},{},{},{},{},{:.6},{:.8},{:.8},{:.8},{:.6},{},{:.4},{}\n",
+                r.method.name(),
                 r.sampler,
                 r.vpls,
                 fm.frame,

@@ -3,6 +3,7 @@
 
 use crate::config;
 use crate::gpu::Gpu;
+use crate::radiosity::Method;
 use crate::scene::Scene;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
@@ -54,10 +55,27 @@ impl Plan {
         })
     }
 
+    /// Every run, in order: (method, sampler, VPLs). Instant radiosity runs every sampler at
+    /// every VPL count; a classical method runs once (its sampler and VPL count unused).
+    pub fn runs(&self) -> Vec<(Method, SamplerKind, u32)> {
+        let c = &self.cfg;
+        let mut runs = Vec::new();
+        for &m in &c.methods {
+            if m == Method::Instant {
+                for &s in &c.samplers {
+                    runs.extend(c.vpls.iter().map(|&v| (m, s, v)));
+                }
+            } else {
+                runs.push((m, c.samplers[0], c.vpls[0]));
+            }
+        }
+        runs
+    }
+
     /// The progress bar's length: reference rows still to trace, plus every run's frames.
     pub fn work_units(&self) -> u64 {
         let missing = super::reference_cache::missing(self) as u64;
-        let runs = (self.cfg.samplers.len() * self.cfg.vpls.len()) as u64;
+        let runs = self.runs().len() as u64;
         missing * self.cfg.sequence.size.height as u64 + runs * self.numbers.len() as u64
     }
 }

@@ -2,9 +2,11 @@
 //! against the reference.
 
 use super::plan::{label, Plan};
+use crate::config;
 use crate::frame::Pipeline;
 use crate::image::Hdr;
 use crate::metrics::{self, SequenceMetrics};
+use crate::radiosity::Method;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
 use serde::Serialize;
@@ -12,6 +14,7 @@ use serde::Serialize;
 /// One run's measurements.
 #[derive(Serialize)]
 pub struct RunRecord {
+    pub method: Method,
     pub sampler: SamplerKind,
     pub vpls: u32,
     pub mean_seconds: f64,
@@ -25,8 +28,12 @@ pub struct RunRecord {
 }
 
 impl RunRecord {
+    /// `mh 256` for instant radiosity, the method's name for a classical one.
     pub fn label(&self) -> String {
-        label(self.sampler, self.vpls)
+        match self.method {
+            Method::Instant => label(self.sampler, self.vpls),
+            m => m.name().to_string(),
+        }
     }
 }
 
@@ -47,11 +54,15 @@ fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
 fn run(
     plan: &Plan,
     reference: &[Hdr],
+    method: Method,
     sampler: SamplerKind,
     vpls: u32,
     tick: &dyn Fn(),
 ) -> Result<(RunRecord, Vec<Hdr>)> {
-    let cfg = plan.cfg.run(sampler, vpls);
+    let cfg = config::Render {
+        method,
+        ..plan.cfg.run(sampler, vpls)
+    };
     let mut p = Pipeline::new(plan.gpu.clone(), plan.scene.clone(), &cfg)?;
     let (mut imgs, mut seconds, mut replaced, mut acceptance) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -65,6 +76,7 @@ fn run(
     }
     let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
     let record = RunRecord {
+        method,
         sampler,
         vpls,
         mean_seconds: mean(seconds.iter().copied()).unwrap_or(0.0),
@@ -91,14 +103,12 @@ pub fn run_all(plan: &Plan, reference: &[Hdr], tick: &dyn Fn()) -> Result<Result
         shown: Vec::new(),
         adapter: plan.gpu.adapter.to_string(),
     };
-    for &s in &plan.cfg.samplers {
-        for &v in &plan.cfg.vpls {
-            let (record, imgs) = run(plan, reference, s, v, tick)?;
-            if v == show {
-                results.shown.push((record.label(), imgs));
-            }
-            results.records.push(record);
+    for (m, s, v) in plan.runs() {
+        let (record, imgs) = run(plan, reference, m, s, v, tick)?;
+        if v == show || m != Method::Instant {
+            results.shown.push((record.label(), imgs));
         }
+        results.records.push(record);
     }
     Ok(results)
 }
