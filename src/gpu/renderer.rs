@@ -328,11 +328,9 @@ impl Renderer {
         })
     }
 
-    /// Uploads what changed since the last frame; returns the slots whose ISM must be
-    /// redrawn and what was reused.
-    fn upload(&mut self, input: &GpuFrame, far: f32, near: f32) -> Result<(Vec<u32>, Reuse)> {
-        let f = input.frame;
-        let c = self.config.clone();
+    /// Checks that the frame fits what the renderer was built for.
+    fn check_input(&self, input: &GpuFrame) -> Result<()> {
+        let (f, c) = (input.frame, &self.config);
         if f.tris.len() != self.tri_count {
             bail!(
                 "the frame has {} triangles but the renderer was built for {}",
@@ -349,7 +347,12 @@ impl Renderer {
                 c.light_samples
             );
         }
-        let q = &self.gpu.queue;
+        Ok(())
+    }
+
+    /// Uploads the triangles and the vertex buffer unless they are the same bits as last
+    /// frame's; returns whether the geometry is still.
+    fn upload_geometry(&mut self, f: &Frame) -> bool {
         let tris: Vec<Tri> = (0..f.tris.len())
             .map(|i| Tri {
                 v0: f.tris[i][0].extend(1.0).to_array(),
@@ -362,6 +365,7 @@ impl Renderer {
             .collect();
         let still = self.reuse && same(&self.last.tris, &tris);
         if !still {
+            let q = &self.gpu.queue;
             q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
             let verts: Vec<Vertex> = f
                 .tris
@@ -377,9 +381,14 @@ impl Renderer {
             q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
             self.last.tris = tris;
         }
+        still
+    }
+
+    /// Uploads the VPLs if any changed and the (slot, point offset) list of the slots whose
+    /// ISM tile must be drawn again; returns those slots and whether the VPLs were uploaded.
+    fn upload_vpls(&mut self, shaded: &[ShadedVpl], still: bool) -> (Vec<u32>, bool) {
         let v4 = |v: Vec3| v.extend(0.0).to_array();
-        let vpls: Vec<Vpl> = input
-            .vpls
+        let vpls: Vec<Vpl> = shaded
             .iter()
             .map(|v| Vpl {
                 pos: v4(v.position),
@@ -396,8 +405,9 @@ impl Renderer {
             })
             .map(|s| s as u32)
             .collect();
-        let vpls_uploaded = !(still && same(&self.last.vpls, &vpls));
-        if vpls_uploaded && !vpls.is_empty() {
+        let q = &self.gpu.queue;
+        let uploaded = !(still && same(&self.last.vpls, &vpls));
+        if uploaded && !vpls.is_empty() {
             q.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&vpls));
         }
         self.last.vpls = vpls;
@@ -408,8 +418,14 @@ impl Renderer {
                 .collect();
             q.write_buffer(&self.slots, 0, bytemuck::cast_slice(&pairs));
         }
-        let lights: Vec<LightSample> = input
-            .lights
+        (changed, uploaded)
+    }
+
+    /// Uploads the emitter samples unless they are the same as last frame's; returns
+    /// whether they were kept.
+    fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
+        let v4 = |v: Vec3| v.extend(0.0).to_array();
+        let lights: Vec<LightSample> = samples
             .iter()
             .map(|l| LightSample {
                 pos: v4(l.position),
@@ -417,11 +433,25 @@ impl Renderer {
                 radiance: v4(l.radiance),
             })
             .collect();
-        let lights_same = self.reuse && same(&self.last.lights, &lights);
-        if !lights.is_empty() && !lights_same {
-            q.write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
+        let kept = self.reuse && same(&self.last.lights, &lights);
+        if !lights.is_empty() && !kept {
+            self.gpu
+                .queue
+                .write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
         }
         self.last.lights = lights;
+        kept
+    }
+
+    /// Uploads what changed since the last frame and the frame's parameters; returns the
+    /// slots whose ISM tiles must be drawn again and what was reused.
+    fn upload(&mut self, input: &GpuFrame, far: f32, near: f32) -> Result<(Vec<u32>, Reuse)> {
+        self.check_input(input)?;
+        let f = input.frame;
+        let still = self.upload_geometry(f);
+        let (changed, vpls_uploaded) = self.upload_vpls(input.vpls, still);
+        let lights_kept = self.upload_lights(input.lights);
+        let c = &self.config;
         let params = Params {
             width: c.width,
             height: c.height,
@@ -446,7 +476,7 @@ impl Renderer {
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let reuse = Reuse {
             geometry_kept: still,
-            lights_kept: lights_same,
+            lights_kept,
             vpls_uploaded,
             shadow_maps_kept: false,
             ism_tiles_kept: input.vpls.len() as u32 - changed.len() as u32,
@@ -455,24 +485,19 @@ impl Renderer {
         Ok((changed, reuse))
     }
 
-    /// Renders one frame. With `components`, the direct and indirect images come back too.
-    pub fn render(&mut self, input: &GpuFrame, components: bool) -> Result<RenderedImage> {
-        let f = input.frame;
-        let c = self.config.clone();
-        let (lo, hi) = f.bounds();
-        // The depth range of the ISMs and hemicubes from the scene alone (every VPL and
-        // emitter sample lies in its bounds), so that kept tiles stay valid while the camera
-        // moves; the camera's covers the scene from wherever the camera is.
-        let far = (hi - lo).length() * 1.5;
-        let near = far * 1e-5;
-        let cam_far = far.max((f.camera.position - (lo + hi) * 0.5).length() * 3.0);
-        let t_upload = Instant::now();
-        let (changed, mut reuse) = self.upload(input, far, near)?;
-        let upload_s = t_upload.elapsed().as_secs_f64();
+    /// Records the frame's passes in order; each names what it reads and writes. Returns
+    /// whether the shadow maps were kept.
+    fn encode_passes(
+        &mut self,
+        rec: &mut Recorder,
+        input: &GpuFrame,
+        changed_slots: u32,
+        geometry_kept: bool,
+        (near, far, cam_far): (f32, f32, f32),
+    ) -> Result<bool> {
+        let (f, c) = (input.frame, self.config.clone());
         let count = (self.tri_count * 3) as u32;
-        let t_gpu = Instant::now();
-        let mut rec = Recorder::new(&self.gpu, self.profiling, self.timestamps.as_ref());
-
+        // gbuffer: vertices -> G-buffer (position, triangle) per pixel.
         let view_proj = f
             .camera
             .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
@@ -480,7 +505,7 @@ impl Renderer {
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
         rec.end_pass()?;
-
+        // shadow_maps: vertices, emitter samples -> hemicube distances (kept while still).
         let samples: Vec<(Vec3, Vec3)> = input
             .lights
             .iter()
@@ -493,28 +518,39 @@ impl Renderer {
             (near, far),
             &self.vertices,
             count,
-            !reuse.geometry_kept,
+            !geometry_kept,
         );
-        reuse.shadow_maps_kept = !drawn && !samples.is_empty();
         rec.end_pass()?;
-
+        // direct: G-buffer, triangles, emitter samples, hemicubes -> direct light.
         self.direct.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
-
-        let n = changed.len() as u32;
-        self.ism.encode_splat(&mut rec.enc, n, c.points_per_vpl);
+        // ism_splat: point set, VPLs, changed slots -> ISM atlas tiles of those slots.
+        self.ism
+            .encode_splat(&mut rec.enc, changed_slots, c.points_per_vpl);
         rec.end_pass()?;
-
-        self.ism.encode_pull_push(&mut rec.enc, n);
+        // ism_pullpush: ISM atlas -> hole-filled pyramid of the changed slots.
+        self.ism.encode_pull_push(&mut rec.enc, changed_slots);
         rec.end_pass()?;
-
+        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light.
         self.gather.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
-
+        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview.
         self.compose.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
+        Ok(!drawn && !samples.is_empty())
+    }
 
-        // The outputs into the staging buffers, in the same submission.
+    /// Copies the outputs into the staging buffers in the frame's submission, submits, and
+    /// reads them back: (HDR, 8-bit RGB, direct and indirect with `components`, seconds per
+    /// pass).
+    #[allow(clippy::type_complexity)]
+    fn read_back(
+        &self,
+        mut rec: Recorder,
+        timestamps: Option<&Timestamps>,
+        components: bool,
+    ) -> Result<(Hdr, Vec<u8>, Option<(Hdr, Hdr)>, Vec<f64>)> {
+        let c = &self.config;
         let pixels = c.width as u64 * c.height as u64;
         let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
         let st = &self.staging;
@@ -530,13 +566,12 @@ impl Renderer {
         let serialized = std::mem::take(&mut rec.cpu);
         rec.submit();
         let mut mapped: Vec<(&wgpu::Buffer, u64)> = reads.iter().map(|r| (r.1, r.2)).collect();
-        let stamped = self.profiling == Profiling::Timestamps && self.timestamps.is_some();
-        if let (true, Some(t)) = (stamped, &self.timestamps) {
+        let stamped = self.profiling == Profiling::Timestamps && timestamps.is_some();
+        if let (true, Some(t)) = (stamped, timestamps) {
             mapped.push((&t.staging, (PASSES.len() as u64 + 1) * 8));
         }
         let mut data = read_mapped(&self.gpu, &mapped)?;
-        let gpu_s = t_gpu.elapsed().as_secs_f64();
-        let pass_s = match (stamped, &self.timestamps) {
+        let pass_s = match (stamped, timestamps) {
             (true, Some(t)) => {
                 let ticks = data.pop().unwrap_or_default();
                 t.seconds(bytemuck::cast_slice(&ticks))
@@ -551,22 +586,49 @@ impl Renderer {
                 data: v.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
             }
         };
-        let hdr = to_hdr(&data[0]);
         let ldr: Vec<u8> = data[1]
             .chunks_exact(4)
             .flat_map(|p| [p[0], p[1], p[2]])
             .collect();
-        let (direct, indirect) = if components {
-            (Some(to_hdr(&data[2])), Some(to_hdr(&data[3])))
-        } else {
-            (None, None)
-        };
+        let parts = components.then(|| (to_hdr(&data[2]), to_hdr(&data[3])));
+        Ok((to_hdr(&data[0]), ldr, parts, pass_s))
+    }
+
+    /// Renders one frame. With `components`, the direct and indirect images come back too.
+    pub fn render(&mut self, input: &GpuFrame, components: bool) -> Result<RenderedImage> {
+        let f = input.frame;
+        let (lo, hi) = f.bounds();
+        // The depth range of the ISMs and hemicubes from the scene alone (every VPL and
+        // emitter sample lies in its bounds), so that kept tiles stay valid while the camera
+        // moves; the camera's covers the scene from wherever the camera is.
+        let far = (hi - lo).length() * 1.5;
+        let near = far * 1e-5;
+        let cam_far = far.max((f.camera.position - (lo + hi) * 0.5).length() * 3.0);
+        let t_upload = Instant::now();
+        let (changed, mut reuse) = self.upload(input, far, near)?;
+        let upload_s = t_upload.elapsed().as_secs_f64();
+        let t_gpu = Instant::now();
+        // The recorder borrows the device and the timestamp queries while the passes
+        // (the shadow maps' reuse state) change.
+        let (gpu, timestamps) = (self.gpu.clone(), self.timestamps.take());
+        let recorded = (|| {
+            let mut rec = Recorder::new(&gpu, self.profiling, timestamps.as_ref());
+            let ranges = (near, far, cam_far);
+            let slots = changed.len() as u32;
+            let kept = self.encode_passes(&mut rec, input, slots, reuse.geometry_kept, ranges)?;
+            Ok::<_, anyhow::Error>((kept, self.read_back(rec, timestamps.as_ref(), components)?))
+        })();
+        self.timestamps = timestamps;
+        let (kept, (hdr, ldr, parts, pass_s)) = recorded?;
+        reuse.shadow_maps_kept = kept;
+        let gpu_s = t_gpu.elapsed().as_secs_f64();
         // Upload (CPU), each pass, then what the frame's GPU work took beyond the passes
         // (submission, copies, mapping; without per-pass times: all of the GPU work).
         let mut timings = vec![("upload", upload_s)];
         timings.extend(PASSES.iter().copied().zip(pass_s.iter().copied()));
         let in_passes: f64 = pass_s.iter().sum();
         timings.push(("readback", (gpu_s - in_passes).max(0.0)));
+        let (direct, indirect) = parts.map_or((None, None), |(d, i)| (Some(d), Some(i)));
         Ok(RenderedImage {
             hdr,
             ldr,
