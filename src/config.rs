@@ -261,7 +261,7 @@ impl Default for SamplerConfig {
             candidates: None,
             camera_points: 256,
             eps: 0.05,
-            mh_rate: 0.1,
+            mh_rate: 1.0,
             mh_escape: 8,
         }
     }

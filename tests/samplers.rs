@@ -101,30 +101,25 @@ fn run_with(p: SamplerParams, frames: u64, skip: u64) -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// On a fixed frame, the averages of many cdf and rejection estimates, and of mh's chain steps
-/// (after burn-in) over many seeds, equal the uniform estimator's, per image quadrant, within 4
-/// standard errors. mh's candidates are one fixed set of paths per seed, so its chains average
-/// to that set's estimate: the standard error comes from the spread over seeds.
+/// On a fixed frame, the averages of many cdf and rejection estimates and of many mh chain steps (after
+/// burn-in) equal the uniform estimator's, per image quadrant, within 4 standard errors.
 #[test]
 fn cdf_and_mh_average_to_the_uniform_estimate() {
     let uniform = stats(&run(SamplerKind::Uniform, 240, 0), 240);
     let cdf = stats(&run(SamplerKind::Cdf, 240, 0), 240);
     let rejection = stats(&run(SamplerKind::Rejection, 240, 0), 240);
-    // Per seed, the mean of frames 5..20.
-    let over_seeds = |escape: u32, first: u64| {
-        let means: Vec<[f64; 4]> = (first..first + 80)
-            .map(|seed| {
-                let p = SamplerParams {
-                    mh_escape: escape,
-                    ..params(SamplerKind::Mh, seed)
-                };
-                stats(&run_with(p, 20, 5), 1).mean
-            })
-            .collect();
-        stats(&means, means.len())
-    };
-    let mh = over_seeds(0, 100);
-    let escape = over_seeds(8, 300);
+    let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
+    let escape = stats(
+        &run_with(
+            SamplerParams {
+                mh_escape: 8,
+                ..params(SamplerKind::Mh, 12)
+            },
+            420,
+            20,
+        ),
+        20,
+    );
     for k in 0..4 {
         for (name, e) in [
             ("cdf", &cdf),
@@ -149,7 +144,7 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         }
         // The test has the power to see a wrong weight: one 30% too low (leaving out M/P
         // would be a factor of about 2.4) falls far outside the bound.
-        for e in [&cdf, &rejection, &mh] {
+        for e in [&cdf, &rejection] {
             let wrong = e.mean[k] * 0.7;
             assert!(
                 (wrong - uniform.mean[k]).abs()
@@ -181,10 +176,10 @@ fn mh_keeps_vpls_cdf_replaces_them() {
         ..params(SamplerKind::Mh, 3)
     });
     println!("replaced per frame: cdf {cdf:.4}, mh {mh:.4}, mh at rate 0.2 {lazy:.4}");
-    // Measured (mh on its fixed candidate set): cdf 1.0000, mh 0.7037, mh at rate 0.2 0.1121.
+    // Measured: cdf 1.0000, mh 0.6444, mh at rate 0.2 0.1045.
     assert!(cdf > 0.95, "cdf replaced {cdf}");
-    assert!(mh < 0.8 && mh > 0.47, "mh replaced {mh}");
-    assert!(lazy < 0.16, "mh at rate 0.2 replaced {lazy}");
+    assert!(mh < 0.75 && mh > 0.43, "mh replaced {mh}");
+    assert!(lazy < 0.15, "mh at rate 0.2 replaced {lazy}");
 }
 
 /// Determinism, for every sampler: two samplers with the same seed select bit-identical VPLs
@@ -267,32 +262,4 @@ fn frozen_keeps_its_paths() {
         "moved {moved} of {}",
         common.len()
     );
-}
-
-/// mh in a still scene: b is bitwise the same every frame and a kept chain's VPL keeps its
-/// weight bitwise (its candidates are the same paths every frame), so only replaced slots
-/// change the image.
-#[test]
-fn mh_kept_weights_do_not_move_in_a_still_scene() {
-    let scene = builtin::load("cornell").unwrap().unwrap();
-    let frame = scene.at(0.0);
-    let tracer = Tracer::new(&frame);
-    let mut s = Sampler::new(params(SamplerKind::Mh, 6));
-    let first = s.select(&frame, &tracer, 0);
-    let mut prev = first.clone();
-    let mut kept = 0;
-    for f in 1..10 {
-        let sel = s.select(&frame, &tracer, f);
-        assert_eq!(sel.b, first.b, "frame {f}");
-        for k in 0..sel.vpls.len() {
-            let same =
-                |a: &irad::vpl::Vpl, b: &irad::vpl::Vpl| (a.path, a.depth) == (b.path, b.depth);
-            if same(&sel.vpls[k], &prev.vpls[k]) {
-                assert_eq!(sel.shaded[k], prev.shaded[k], "frame {f} slot {k}");
-                kept += 1;
-            }
-        }
-        prev = sel;
-    }
-    assert!(kept > 9 * 32 / 5, "kept {kept}");
 }

@@ -7,18 +7,16 @@
 //!   transform of the CDF of I, weight `b / (N I(v)) * (M / P)` with `b` the mean of I over
 //!   the candidates. (M / P turns "one candidate" into "one path's share": the candidates of P
 //!   paths sum, divided by P, to the uniform estimator.)
-//! - `mh`: N independent Metropolis-Hastings chains, one per slot, one step a frame. Its
-//!   candidates are the VPLs of one fixed set of P paths (the same path ids every frame,
-//!   re-traced in each frame's scene, P fixed by the first frame), so b and M / P move only
-//!   when the scene or view does. Each step: the slot's VPL in the new frame (its path
-//!   re-traced) with I re-evaluated under the new camera; with probability `mh_rate`, propose
-//!   a uniformly chosen candidate (an independence proposal from p), accept with
+//! - `mh`: N independent Metropolis-Hastings chains, one per slot, one step a frame: re-trace
+//!   the slot's path in the new frame, re-evaluate its I under the new camera, propose a
+//!   uniformly chosen candidate of the frame (an independence proposal from p), accept with
 //!   `min(1, I'/I)`; weight `b / (N I) * (M / P)`. Chains start from a CDF draw. Escape
 //!   (`mh_escape` > 0): a chain whose VPL no camera point sees (I at the floor) makes up to
 //!   that many more proposals in the frame and takes the first one some camera point sees.
 //!   Without it, when the view changes abruptly (through a door), many chains land on hidden
 //!   VPLs at once, where the proposals (mostly hidden too) keep them for frames, each with the
 //!   floor's large weight, and ISM light leaks times that weight shows as bright flashes.
+//!
 //! - `frozen`: `uniform` with the same light paths (path ids, so the same random numbers)
 //!   every frame, re-traced in each frame's scene: VPLs slide with moving lights and objects
 //!   and stay put in a still scene (what offline VPL renderers do for animations).

@@ -5,7 +5,7 @@ use super::Selection;
 use crate::scene::Frame;
 use crate::trace::Tracer;
 use crate::vpl::importance::{importance_all, CameraPoint};
-use crate::vpl::{trace_path, trace_paths, ShadedVpl, Vpl};
+use crate::vpl::{trace_path, ShadedVpl, Vpl};
 use rand::Rng;
 use std::time::Instant;
 
@@ -108,36 +108,6 @@ impl Candidates {
         let t = Instant::now();
         let (vpls, paths) = fresh_paths(frame, tracer, seed, stream, m, false);
         let paths_s = t.elapsed().as_secs_f64();
-        Self::of(vpls, paths, paths_s, points, tracer, eps, dmin)
-    }
-
-    /// The VPLs of exactly paths `first..first + count`, with their floored importance.
-    #[allow(clippy::too_many_arguments)]
-    pub fn of_paths(
-        frame: &Frame,
-        tracer: &Tracer,
-        points: &[CameraPoint],
-        seed: u64,
-        first: u64,
-        count: u64,
-        eps: f32,
-        dmin: f32,
-    ) -> Self {
-        let t = Instant::now();
-        let vpls = trace_paths(frame, tracer, seed, first, count);
-        let paths_s = t.elapsed().as_secs_f64();
-        Self::of(vpls, count, paths_s, points, tracer, eps, dmin)
-    }
-
-    fn of(
-        vpls: Vec<Vpl>,
-        paths: u64,
-        paths_s: f64,
-        points: &[CameraPoint],
-        tracer: &Tracer,
-        eps: f32,
-        dmin: f32,
-    ) -> Self {
         let raw = importance_all(&vpls, points, tracer, dmin);
         let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
         let floor = (eps as f64 * mean) as f32;

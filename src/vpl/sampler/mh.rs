@@ -1,15 +1,6 @@
 //! `mh`: one Metropolis-Hastings chain per slot, one step a frame (see the module docs).
-//!
-//! The candidates (the proposals, and the normalization b) are the VPLs of one fixed set of
-//! light paths, the same path ids in every frame, re-traced in each frame's scene: P is fixed
-//! by the first frame (the paths that give at least M VPLs). So in a still scene b, M / P and
-//! every kept chain's weight are bitwise the same from frame to frame, and under a moving
-//! light or object they move only as the re-traced paths do. Given the candidate set, the
-//! chains' stationary distribution is `I / sum I` over the candidates and the weight
-//! `b / (N I) * (M / P) = sum I / (N P I)`, so the estimate's mean is the uniform estimate
-//! of those P paths: unbiased over the seed, with no ratio bias from b.
 
-use super::common::{cdf_draw, key, mh_accept, weighted, Candidates, Key, PATHS_PER_FRAME};
+use super::common::{cdf_draw, key, mh_accept, weighted, Candidates, Key};
 use super::{SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
@@ -17,19 +8,12 @@ use crate::trace::Tracer;
 use crate::vpl::importance::{camera_points, importance, CameraPoint};
 use crate::vpl::{trace_path, Vpl};
 use rand::Rng;
-use std::collections::HashMap;
 use std::time::Instant;
-
-/// The stream of the candidates' paths (path ids `MH_STREAM * 2^32 + k`), apart from every
-/// frame's fresh paths.
-const MH_STREAM: u64 = (1 << 32) - 2;
 
 pub struct Mh {
     params: SamplerParams,
     /// The VPL each chain is on, by key; empty before the first frame.
     chains: Vec<Key>,
-    /// P: the number of candidate paths, fixed by the first frame with VPLs.
-    paths: Option<u64>,
 }
 
 impl Mh {
@@ -37,34 +21,23 @@ impl Mh {
         Mh {
             params: params.clone(),
             chains: Vec::new(),
-            paths: None,
         }
     }
 
-    /// Each chain's VPL in this frame with its importance: the candidate with its key, else
-    /// its path re-traced (None: the path no longer reaches that depth).
+    /// Each chain's VPL re-traced in this frame with its importance (None: its path no longer
+    /// reaches that depth).
     fn current(
         &self,
         frame: &Frame,
         tracer: &Tracer,
         points: &[CameraPoint],
-        c: &Candidates,
+        floor: f32,
     ) -> Vec<Option<(Vpl, f32)>> {
         use rayon::prelude::*;
         let p = &self.params;
-        let index: HashMap<Key, usize> = c
-            .vpls
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (key(v), i))
-            .collect();
-        let floor = c.floor;
         self.chains
             .par_iter()
             .map(|&(path, depth)| {
-                if let Some(&i) = index.get(&(path, depth)) {
-                    return Some((c.vpls[i], c.importance[i]));
-                }
                 let v = trace_path(frame, tracer, p.seed, path)
                     .into_iter()
                     .find(|v| v.depth == depth)?;
@@ -122,31 +95,18 @@ impl VplSampler for Mh {
         let p = self.params.clone();
         let t = Instant::now();
         let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
-        let c = match self.paths {
-            Some(count) => Candidates::of_paths(
-                frame,
-                tracer,
-                &points,
-                p.seed,
-                MH_STREAM * PATHS_PER_FRAME,
-                count,
-                p.eps,
-                p.dmin,
-            ),
-            None => Candidates::new(
-                frame,
-                tracer,
-                &points,
-                p.seed,
-                MH_STREAM,
-                p.candidates,
-                p.eps,
-                p.dmin,
-            ),
-        };
+        let c = Candidates::new(
+            frame,
+            tracer,
+            &points,
+            p.seed,
+            f,
+            p.candidates,
+            p.eps,
+            p.dmin,
+        );
         if c.vpls.is_empty() {
             self.chains.clear();
-            self.paths = None;
             return Selection {
                 paths: c.paths,
                 importance_s: t.elapsed().as_secs_f64() - c.paths_s,
@@ -156,7 +116,7 @@ impl VplSampler for Mh {
         let n = p.slots;
         let mut r = rng(&[p.seed, f, 0x5a3b]);
         let (chosen, imp, acceptance) = if self.chains.len() == n {
-            let current = self.current(frame, tracer, &points, &c);
+            let current = self.current(frame, tracer, &points, c.floor);
             self.step(current, &c, &mut r)
         } else {
             // Chains start from a CDF draw.
@@ -166,7 +126,6 @@ impl VplSampler for Mh {
             (chosen, imp, 1.0)
         };
         self.chains = chosen.iter().map(key).collect();
-        self.paths = Some(c.paths);
         let mut s = weighted(chosen, &imp, c.scale(n), c.paths, c.b, Some(acceptance));
         s.importance_s = t.elapsed().as_secs_f64() - c.paths_s;
         s
