@@ -310,6 +310,10 @@ pub struct Quality {
     /// Shadow hemicube face side in texels
     #[arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true)]
     pub shadow_size: u32,
+    /// Interleaved gather: each pixel of an NxN block gathers every (N^2)-th VPL, then a
+    /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all)
+    #[arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true)]
+    pub interleave: u32,
 }
 
 impl Default for Quality {
@@ -321,6 +325,7 @@ impl Default for Quality {
             ism_bias: 1.5,
             light_samples: 32,
             shadow_size: 256,
+            interleave: 1,
         }
     }
 }
@@ -352,7 +357,8 @@ impl Quality {
         )?;
         check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
         check::int("--light-samples", self.light_samples, 1, 4096)?;
-        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)
+        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
+        check::int("--interleave", self.interleave, 1, 8)
     }
 }
 
@@ -476,6 +482,7 @@ impl Render {
             ism_bias: q.ism_bias,
             light_samples: q.light_samples,
             shadow_size: q.shadow_size,
+            interleave: q.interleave,
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,
