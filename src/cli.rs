@@ -34,14 +34,24 @@ pub enum Command {
         /// Where metrics.json and metrics.csv go [default: the test folder]
         #[arg(long)]
         out: Option<PathBuf>,
+        /// The scene the frames show (built-in name or glTF file): also the motion-compensated
+        /// flicker (warped.json)
+        #[arg(long)]
+        scene: Option<String>,
+        /// With --scene: frames per second (frame f is at time f / fps)
+        #[arg(long, default_value_t = 24.0, allow_hyphen_values = true)]
+        fps: f32,
     },
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value_t = config::Render::default().backend)]
         backend: crate::gpu::BackendChoice,
     },
-    /// List the built-in scenes and what each stresses
+    /// List the built-in scenes and what each stresses, or inspect one scene
     Scenes {
+        /// A built-in scene name or a .gltf/.glb path: print its triangles, emitters and their
+        /// power, cameras, animation, bounds and the loader's warnings
+        scene: Option<String>,
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
         #[arg(long)]
         generate: Option<PathBuf>,
@@ -56,7 +66,10 @@ impl Command {
             Command::Reference(c) => c.validate(),
             Command::Compare(c) => c.validate(),
             Command::Bench(c) => c.validate(),
-            Command::Metrics { .. } | Command::Info { .. } | Command::Scenes { .. } => Ok(()),
+            Command::Metrics { fps, .. } => {
+                crate::config::check::float("--fps", *fps, 0.0, true, 1000.0)
+            }
+            Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
     }
 }
@@ -74,9 +87,19 @@ pub fn run(cli: Cli) -> Result<()> {
             test,
             reference,
             out,
-        } => commands::metrics::metrics(&test, &reference, out.as_deref()).map(|_| ()),
+            scene,
+            fps,
+        } => {
+            commands::metrics::metrics(&test, &reference, out.as_deref())?;
+            match scene {
+                Some(s) => commands::metrics::warped(&test, &reference, &s, fps, out.as_deref()),
+                None => Ok(()),
+            }
+        }
         Command::Info { backend } => commands::info(backend),
-        Command::Scenes { generate } => commands::scenes(generate.as_deref()),
+        Command::Scenes { scene, generate } => {
+            commands::scenes(scene.as_deref(), generate.as_deref())
+        }
     }
 }
 

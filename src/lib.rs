@@ -1,6 +1,7 @@
 //! irad: instant radiosity for animation sequences, with temporally coherent virtual point
 //! lights. One folder per stage of a frame: `scene` (1), `trace` (2), `vpl` (3-6), `gpu` (7),
-//! `reference`, `metrics`, `report` (8).
+//! `reference`, `metrics`, `report` (8); `radiosity`: the classical finite-element methods, for
+//! comparison.
 
 pub mod cli;
 pub mod commands;
@@ -10,6 +11,7 @@ pub mod gpu;
 pub mod image;
 pub mod math;
 pub mod metrics;
+pub mod radiosity;
 pub mod reference;
 pub mod report;
 pub mod scene;

@@ -1,5 +1,6 @@
-//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf` and `mh` must
-//! average to what `uniform` averages to, and `mh` must keep most of its VPLs from frame to frame.
+//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection`
+//! and `mh` must average to what `uniform` averages to, `mh` must keep most of its VPLs from
+//! frame to frame, and `frozen` must keep its light paths.
 
 use glam::Vec3;
 use irad::math::luminance;
@@ -100,26 +101,37 @@ fn run_with(p: SamplerParams, frames: u64, skip: u64) -> Vec<[f64; 4]> {
         .collect()
 }
 
-/// On a fixed frame, the averages of many cdf estimates and of many mh chain steps (after
-/// burn-in) equal the uniform estimator's, per image quadrant, within 4 standard errors.
+/// On a fixed frame, the averages of many cdf and rejection estimates, and of mh's chain steps
+/// (after burn-in) over many seeds, equal the uniform estimator's, per image quadrant, within 4
+/// standard errors. mh's candidates are one fixed set of paths per seed, so its chains average
+/// to that set's estimate: the standard error comes from the spread over seeds.
 #[test]
 fn cdf_and_mh_average_to_the_uniform_estimate() {
     let uniform = stats(&run(SamplerKind::Uniform, 240, 0), 240);
     let cdf = stats(&run(SamplerKind::Cdf, 240, 0), 240);
-    let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
-    let escape = stats(
-        &run_with(
-            SamplerParams {
-                mh_escape: 8,
-                ..params(SamplerKind::Mh, 12)
-            },
-            420,
-            20,
-        ),
-        20,
-    );
+    let rejection = stats(&run(SamplerKind::Rejection, 240, 0), 240);
+    // Per seed, the mean of frames 5..20.
+    let over_seeds = |escape: u32, first: u64| {
+        let means: Vec<[f64; 4]> = (first..first + 80)
+            .map(|seed| {
+                let p = SamplerParams {
+                    mh_escape: escape,
+                    ..params(SamplerKind::Mh, seed)
+                };
+                stats(&run_with(p, 20, 5), 1).mean
+            })
+            .collect();
+        stats(&means, means.len())
+    };
+    let mh = over_seeds(0, 100);
+    let escape = over_seeds(8, 300);
     for k in 0..4 {
-        for (name, e) in [("cdf", &cdf), ("mh", &mh), ("mh escape 8", &escape)] {
+        for (name, e) in [
+            ("cdf", &cdf),
+            ("rejection", &rejection),
+            ("mh", &mh),
+            ("mh escape 8", &escape),
+        ] {
             let z = (e.mean[k] - uniform.mean[k]).abs()
                 / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
             println!(
@@ -137,11 +149,13 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         }
         // The test has the power to see a wrong weight: one 30% too low (leaving out M/P
         // would be a factor of about 2.4) falls far outside the bound.
-        let wrong = cdf.mean[k] * 0.7;
-        assert!(
-            (wrong - uniform.mean[k]).abs()
-                > 4.0 * (cdf.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
-        );
+        for e in [&cdf, &rejection, &mh] {
+            let wrong = e.mean[k] * 0.7;
+            assert!(
+                (wrong - uniform.mean[k]).abs()
+                    > 4.0 * (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
+            );
+        }
     }
 }
 
@@ -167,11 +181,10 @@ fn mh_keeps_vpls_cdf_replaces_them() {
         ..params(SamplerKind::Mh, 3)
     });
     println!("replaced per frame: cdf {cdf:.4}, mh {mh:.4}, mh at rate 0.2 {lazy:.4}");
-    // Measured: cdf 1.0000, mh 0.6444, mh at rate 0.2 0.1045.
+    // Measured (mh on its fixed candidate set): cdf 1.0000, mh 0.7037, mh at rate 0.2 0.1121.
     assert!(cdf > 0.95, "cdf replaced {cdf}");
-    assert!(mh < 0.75 && mh > 0.43, "mh replaced {mh}");
-    assert!(lazy < 0.15, "mh at rate 0.2 replaced {lazy}");
-    let _ = Vec3::ZERO;
+    assert!(mh < 0.8 && mh > 0.47, "mh replaced {mh}");
+    assert!(lazy < 0.16, "mh at rate 0.2 replaced {lazy}");
 }
 
 /// Determinism, for every sampler: two samplers with the same seed select bit-identical VPLs
@@ -186,7 +199,13 @@ fn same_seed_same_vpls_other_seed_other_vpls() {
             .flat_map(|c| c.to_array().map(f32::to_bits))
             .collect()
     };
-    for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {
+    for kind in [
+        SamplerKind::Uniform,
+        SamplerKind::Cdf,
+        SamplerKind::Mh,
+        SamplerKind::Frozen,
+        SamplerKind::Rejection,
+    ] {
         let mut a = Sampler::new(params(kind, 5));
         let mut b = Sampler::new(params(kind, 5));
         let mut other = Sampler::new(params(kind, 6));
@@ -198,4 +217,82 @@ fn same_seed_same_vpls_other_seed_other_vpls() {
             assert_ne!(x.shaded, z.shaded, "{kind:?} frame {f}: seed 6 = seed 5");
         }
     }
+}
+
+/// `frozen` gives bitwise the same VPL set every frame of a still scene (uniform does not),
+/// and under a moving light the same paths, re-traced, so its VPLs move with the light.
+#[test]
+fn frozen_keeps_its_paths() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let mut frozen = Sampler::new(params(SamplerKind::Frozen, 4));
+    let mut uniform = Sampler::new(params(SamplerKind::Uniform, 4));
+    let first = frozen.select(&frame, &tracer, 0);
+    let u0 = uniform.select(&frame, &tracer, 0);
+    assert!(!first.vpls.is_empty());
+    for f in 1..5 {
+        let s = frozen.select(&frame, &tracer, f);
+        assert_eq!(s.vpls, first.vpls, "frame {f}");
+        assert_eq!(s.shaded, first.shaded, "frame {f}");
+        assert_eq!(s.replaced, 0.0);
+        assert_ne!(uniform.select(&frame, &tracer, f).vpls, u0.vpls);
+    }
+    // A moving light: the same path ids, but the VPLs have moved.
+    let scene = builtin::load("cornell-light").unwrap().unwrap();
+    let mut frozen = Sampler::new(SamplerParams {
+        slots: 256,
+        ..params(SamplerKind::Frozen, 4)
+    });
+    let (a, b) = (scene.at(0.0), scene.at(0.5));
+    let sa = frozen.select(&a, &Tracer::new(&a), 0);
+    let sb = frozen.select(&b, &Tracer::new(&b), 12);
+    // Both frames use paths 0..P of the same stream (paths that escape leave no VPL).
+    for s in [&sa, &sb] {
+        assert!(s.vpls.iter().all(|v| v.path < s.paths), "paths {}", s.paths);
+    }
+    let first_hit = |s: &irad::vpl::sampler::Selection, path: u64| {
+        s.vpls
+            .iter()
+            .find(|v| v.path == path && v.depth == 1)
+            .map(|v| v.position)
+    };
+    let common: Vec<(Vec3, Vec3)> = (0..sa.paths.min(sb.paths))
+        .filter_map(|p| Some((first_hit(&sa, p)?, first_hit(&sb, p)?)))
+        .collect();
+    let moved = common.iter().filter(|(x, y)| x.distance(*y) > 1e-3).count();
+    assert!(common.len() > 50, "{} paths in both frames", common.len());
+    assert!(
+        moved > common.len() / 2,
+        "moved {moved} of {}",
+        common.len()
+    );
+}
+
+/// mh in a still scene: b is bitwise the same every frame and a kept chain's VPL keeps its
+/// weight bitwise (its candidates are the same paths every frame), so only replaced slots
+/// change the image.
+#[test]
+fn mh_kept_weights_do_not_move_in_a_still_scene() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let mut s = Sampler::new(params(SamplerKind::Mh, 6));
+    let first = s.select(&frame, &tracer, 0);
+    let mut prev = first.clone();
+    let mut kept = 0;
+    for f in 1..10 {
+        let sel = s.select(&frame, &tracer, f);
+        assert_eq!(sel.b, first.b, "frame {f}");
+        for k in 0..sel.vpls.len() {
+            let same =
+                |a: &irad::vpl::Vpl, b: &irad::vpl::Vpl| (a.path, a.depth) == (b.path, b.depth);
+            if same(&sel.vpls[k], &prev.vpls[k]) {
+                assert_eq!(sel.shaded[k], prev.shaded[k], "frame {f} slot {k}");
+                kept += 1;
+            }
+        }
+        prev = sel;
+    }
+    assert!(kept > 9 * 32 / 5, "kept {kept}");
 }

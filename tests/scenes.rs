@@ -282,7 +282,7 @@ fn only_non_triangle_primitives() {
 }
 
 #[test]
-fn no_camera_is_a_warning_and_a_framing_camera() {
+fn no_camera_is_a_warning_and_a_camera_that_sees_the_lit_box() {
     let mut v = builtin_json("cornell");
     for n in v["nodes"].as_array_mut().unwrap() {
         n.as_object_mut().unwrap().remove("camera");
@@ -290,12 +290,32 @@ fn no_camera_is_a_warning_and_a_framing_camera() {
     let scene = load_json(&v).unwrap();
     assert_eq!(scene.warnings.len(), 1);
     assert!(
-        scene.warnings[0].contains("no perspective camera"),
+        scene.warnings[0].contains("no perspective camera")
+            && scene.warnings[0].contains("what the lights light"),
         "{:?}",
         scene.warnings
     );
-    let c = scene.at(0.0).camera;
-    assert!(c.position.z > 1.0 && (c.forward - Vec3::NEG_Z).length() < 1e-6);
+    // Through the open front: the camera is in front of the box (z > 1) and its rays hit the
+    // inside of the box, not the outside of a wall or the ceiling.
+    let f = scene.at(0.0);
+    let c = f.camera;
+    assert!(c.position.z > 1.0, "{c:?}");
+    let tr = irad::trace::Tracer::new(&f);
+    let (mut hit, mut inside) = (0, 0);
+    for y in 0..16 {
+        for x in 0..16 {
+            let d = c.ray_dir(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5), 16, 16);
+            if let Some(h) = tr.intersect(c.position, d, 100.0) {
+                hit += 1;
+                inside += (f.normals[h.tri as usize].dot(d) < 0.0) as usize;
+            }
+        }
+    }
+    // Measured: 100 of 256 rays hit the box, all 100 on a front (inner) face.
+    assert!(
+        hit >= 67 && inside == hit,
+        "{inside} of {hit} hits (256 rays) see the box from inside"
+    );
 }
 
 #[test]

@@ -60,3 +60,25 @@ pub fn metrics(
     println!("wrote {}/metrics.json and metrics.csv", dir.display());
     Ok(m)
 }
+
+/// `irad metrics ... --scene S`: motion-compensated flicker of the frames of scene `S`.
+pub fn warped(
+    test: &Path,
+    reference: &Path,
+    scene: &str,
+    fps: f32,
+    out: Option<&Path>,
+) -> Result<()> {
+    let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
+    let scene = crate::scene::builtin::load_any(scene)?;
+    let w = crate::metrics::warp::for_scene(&scene, fps, &numbers, &t, &r)?;
+    println!(
+        "warped flicker F1 {:.5} ({:.1}% of pixels kept)",
+        w.f1,
+        100.0 * w.kept
+    );
+    let dir = out.unwrap_or(test);
+    report::write_json(&dir.join("warped.json"), &w)?;
+    println!("wrote {}/warped.json", dir.display());
+    Ok(())
+}

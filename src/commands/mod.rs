@@ -23,8 +23,16 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-/// `irad scenes`: the built-in scenes and what each stresses; `--generate DIR` writes them.
-pub fn scenes(generate: Option<&Path>) -> Result<()> {
+/// `irad scenes`: the built-in scenes and what each stresses; `--generate DIR` writes them;
+/// `irad scenes FILE` inspects one.
+pub fn scenes(scene: Option<&str>, generate: Option<&Path>) -> Result<()> {
+    if let Some(spec) = scene {
+        print!(
+            "{}",
+            crate::scene::inspect::inspect(&builtin::load_any(spec)?)
+        );
+        return Ok(());
+    }
     if let Some(dir) = generate {
         report::prepare_out_dir(dir)?;
         for b in builtin::BUILTINS {

@@ -11,6 +11,7 @@ pub mod gbuffer;
 pub mod interleave;
 pub mod ism;
 pub mod profile;
+pub mod radiosity;
 pub mod renderer;
 pub mod shadow;
 

@@ -3,6 +3,8 @@
 
 use crate::image::Hdr;
 use crate::math::luminance;
+pub mod warp;
+
 use anyhow::{bail, Result};
 use serde::Serialize;
 

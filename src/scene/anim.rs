@@ -50,8 +50,25 @@ impl Channel {
         match self.property {
             Property::Translation => Value::Translation(v.truncate()),
             Property::Scale => Value::Scale(v.truncate()),
-            Property::Rotation => Value::Rotation(Quat::from_vec4(v).normalize()),
+            // A spline can pass through the zero quaternion: keep the nearest key's rotation.
+            Property::Rotation => {
+                let q = v
+                    .try_normalize()
+                    .unwrap_or_else(|| self.nearest_key(t).normalize());
+                Value::Rotation(Quat::from_vec4(q))
+            }
         }
+    }
+
+    fn nearest_key(&self, t: f32) -> Vec4 {
+        let k = self.times.partition_point(|&x| x <= t);
+        let k = match k {
+            0 => 0,
+            k if k >= self.times.len() => self.times.len() - 1,
+            k if t - self.times[k - 1] < self.times[k] - t => k - 1,
+            k => k,
+        };
+        self.key(k)
     }
 
     fn sample_raw(&self, t: f32) -> Vec4 {

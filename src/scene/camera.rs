@@ -47,6 +47,19 @@ impl Camera {
         }
     }
 
+    /// Whether rays can be made from it: finite, unit orthogonal axes, a field of view irad
+    /// accepts (a camera scaled to zero or a field of view of 0 or pi is not).
+    pub fn is_valid(&self) -> bool {
+        let unit = |v: Vec3| v.is_finite() && (v.length() - 1.0).abs() < 1e-3;
+        let (lo, hi) = crate::scene::load::FOV_RANGE;
+        self.position.is_finite()
+            && unit(self.forward)
+            && unit(self.up)
+            && unit(self.right)
+            && self.forward.dot(self.up).abs() < 1e-3
+            && (lo..=hi).contains(&self.yfov)
+    }
+
     /// A camera that frames the bounding box from +Z.
     pub fn framing(lo: Vec3, hi: Vec3) -> Self {
         let center = (lo + hi) * 0.5;

@@ -5,6 +5,8 @@
 pub mod anim;
 pub mod builtin;
 pub mod camera;
+pub mod framing;
+pub mod inspect;
 pub mod load;
 
 use glam::{Mat4, Quat, Vec3};
@@ -13,12 +15,15 @@ use std::sync::Arc;
 pub use anim::{Channel, Interpolation, Property};
 pub use camera::Camera;
 
-/// A Lambertian material: albedo `rho` and emitted radiance `Le` (front face only).
+/// A Lambertian material: albedo `rho` and emitted radiance `Le` (front face only, unless
+/// `double_sided`: then [`Scene::at`] adds a back-facing twin of each emitting triangle).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
     pub albedo: Vec3,
     pub emission: Vec3,
+    /// glTF's doubleSided: an emitting surface emits from both sides.
+    pub double_sided: bool,
 }
 
 /// One triangle list with one material, in its node's local space.
@@ -85,6 +90,9 @@ pub struct Scene {
     pub channels: Vec<Channel>,
     /// Warnings raised while loading (one per kind of thing ignored).
     pub warnings: Vec<String>,
+    /// A translation above every root: moves a scene that lies far from the origin back to
+    /// it (zero for most scenes).
+    pub shift: Vec3,
 }
 
 /// Emissive triangles of a frame, with a CDF for choosing one in proportion to power.
@@ -159,6 +167,40 @@ pub(crate) fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
 }
 
 impl Scene {
+    /// Renders from `eye` toward `target` with vertical field of view `yfov` (radians)
+    /// instead of the file's camera (up is +Y, or +Z when looking straight up or down). The
+    /// message says which of the three is wrong.
+    pub fn set_camera(&mut self, eye: Vec3, target: Vec3, yfov: f32) -> Result<(), String> {
+        let lim = load::MAX_COORD;
+        for (what, p) in [("eye", eye), ("target", target)] {
+            if !p.is_finite() || p.abs().max_element() > lim {
+                return Err(format!(
+                    "the {what} {p} is not a finite point within {lim:e} of the origin"
+                ));
+            }
+        }
+        let d = target - eye;
+        if d.length() <= 1e-6 * eye.abs().max_element().max(1.0) {
+            return Err(format!("the eye and the target are the same point {eye}"));
+        }
+        let (lo, hi) = load::FOV_RANGE;
+        if !(lo..=hi).contains(&yfov) {
+            return Err(format!(
+                "the field of view {yfov} rad ({:.1} degrees) is outside {lo}..{hi} rad",
+                yfov.to_degrees()
+            ));
+        }
+        let up = if d.normalize().y.abs() > 0.99 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        let (eye, target) = (eye + self.shift, target + self.shift);
+        self.default_camera = Camera::look_at(eye, target, up, yfov);
+        self.camera_node = None;
+        Ok(())
+    }
+
     /// Length of the animation in seconds (0 for a still scene).
     pub fn duration(&self) -> f32 {
         self.channels
@@ -191,8 +233,8 @@ impl Scene {
     pub fn world_matrices(&self, t: f32) -> Vec<Mat4> {
         let locals = self.locals_at(t);
         let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
-        let mut stack: Vec<(usize, Mat4)> =
-            self.roots.iter().map(|&r| (r, Mat4::IDENTITY)).collect();
+        let top = Mat4::from_translation(self.shift);
+        let mut stack: Vec<(usize, Mat4)> = self.roots.iter().map(|&r| (r, top)).collect();
         while let Some((n, parent)) = stack.pop() {
             world[n] = parent * locals[n];
             for &c in &self.nodes[n].children {
@@ -202,9 +244,21 @@ impl Scene {
         world
     }
 
-    /// Evaluates the scene at time `t` (seconds).
-    pub fn at(&self, t: f32) -> Frame {
+    /// The camera of the file's camera node at time `t`, as its transform gives it (None
+    /// without one; not checked: see [`Camera::is_valid`]).
+    pub fn file_camera(&self, t: f32) -> Option<Camera> {
+        let n = self.camera_node?;
         let world = self.world_matrices(t);
+        Some(Camera::from_world(
+            world[n],
+            self.nodes[n].camera.map_or(0.7, |c| c.yfov),
+        ))
+    }
+
+    /// World-space triangles and their materials in depth-first node order. A node whose
+    /// world matrix mirrors (negative determinant) has its winding flipped, so that front
+    /// faces stay front faces (glTF 2.0 section 3.7.4).
+    fn triangles(&self, world: &[Mat4]) -> (Vec<[Vec3; 3]>, Vec<u32>) {
         let mut tris = Vec::new();
         let mut tri_material = Vec::new();
         let mut order = Vec::new();
@@ -218,6 +272,11 @@ impl Scene {
                 continue;
             };
             let m = world[n];
+            let (b, c) = if m.determinant() < 0.0 {
+                (2, 1)
+            } else {
+                (1, 2)
+            };
             for prim in &self.meshes[mesh] {
                 let p: Vec<Vec3> = prim
                     .positions
@@ -225,11 +284,42 @@ impl Scene {
                     .map(|&p| m.transform_point3(p))
                     .collect();
                 for idx in prim.indices.chunks_exact(3) {
-                    tris.push([p[idx[0] as usize], p[idx[1] as usize], p[idx[2] as usize]]);
+                    tris.push([p[idx[0] as usize], p[idx[b] as usize], p[idx[c] as usize]]);
                     tri_material.push(prim.material as u32);
                 }
             }
         }
+        self.add_back_emitters(&mut tris, &mut tri_material);
+        (tris, tri_material)
+    }
+
+    /// For each triangle of a double-sided emitting material, a twin with the opposite
+    /// winding 1e-4 of the scene's size behind it, so that the back emits too while every
+    /// stage keeps treating emitters as one-sided (appended, so indices stay stable).
+    fn add_back_emitters(&self, tris: &mut Vec<[Vec3; 3]>, mats: &mut Vec<u32>) {
+        let two_sided = |m: u32| {
+            let m = &self.materials[m as usize];
+            m.double_sided && m.emission.max_element() > 0.0
+        };
+        if !mats.iter().any(|&m| two_sided(m)) {
+            return;
+        }
+        let (lo, hi) = bounds(tris.iter().flatten().copied());
+        let gap = 1e-4 * (hi - lo).max_element();
+        for i in 0..tris.len() {
+            if two_sided(mats[i]) {
+                let [a, b, c] = tris[i];
+                let back = -(b - a).cross(c - a).normalize_or_zero() * gap;
+                tris.push([a + back, c + back, b + back]);
+                mats.push(mats[i]);
+            }
+        }
+    }
+
+    /// Evaluates the scene at time `t` (seconds).
+    pub fn at(&self, t: f32) -> Frame {
+        let world = self.world_matrices(t);
+        let (tris, tri_material) = self.triangles(&world);
         let mut normals = Vec::with_capacity(tris.len());
         let mut areas = Vec::with_capacity(tris.len());
         for [a, b, c] in &tris {
@@ -259,6 +349,10 @@ impl Scene {
             Some(n) => Camera::from_world(world[n], self.nodes[n].camera.map_or(0.7, |c| c.yfov)),
             None => self.default_camera,
         };
+        // A camera scaled to nothing between the times the loader checked: the framing one.
+        let camera = Some(camera)
+            .filter(Camera::is_valid)
+            .unwrap_or(self.default_camera);
         Frame {
             time: t,
             tris,

@@ -1,6 +1,8 @@
 //! The comparison's reference frames: path-traced once and kept in
-//! `CACHE/reference/<scene>_<WxH>_<spp>spp_<fps>fps_seed<S>/`, reused frame by frame
-//! whenever those settings match.
+//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>/`, reused frame by frame
+//! whenever those settings match. The hash is of the scene's source (the file's bytes, or a
+//! built-in's generated glTF), so an edited file, or another file of the same name, gets a
+//! reference of its own.
 
 use super::plan::Plan;
 use crate::config;
@@ -25,9 +27,25 @@ pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
         .collect();
     let s = &cfg.sequence;
     cfg.cache.join("reference").join(format!(
-        "{name}_{}_{}spp_{}fps_seed{}",
-        s.size, cfg.spp, s.fps, s.seed
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}",
+        source_hash(spec),
+        s.size,
+        cfg.spp,
+        s.fps,
+        s.seed
     ))
+}
+
+/// FNV-1a of the scene's source: a built-in's generated text, else the file's bytes (0 if
+/// unreadable: loading the scene reports that).
+fn source_hash(spec: &str) -> u64 {
+    let bytes = crate::scene::builtin::generate(spec)
+        .map(String::into_bytes)
+        .or_else(|| std::fs::read(spec).ok())
+        .unwrap_or_default();
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 fn cached(plan: &Plan, f: u32) -> PathBuf {
@@ -90,4 +108,36 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>>
         .into_iter()
         .map(|i| i.unwrap_or_else(|| traced.next().expect("one traced per missing")))
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_cache_folder_follows_the_scene_source_and_settings() {
+        let dir_of = |spec: &str, spp: u32| {
+            let c = config::Compare {
+                spp,
+                ..Default::default()
+            };
+            dir(&c, spec)
+        };
+        let root = std::env::temp_dir().join(format!("irad-cache-{}", std::process::id()));
+        let (a, b) = (root.join("a"), root.join("b"));
+        std::fs::create_dir_all(&a).unwrap();
+        std::fs::create_dir_all(&b).unwrap();
+        let (fa, fb) = (a.join("scene.gltf"), b.join("scene.gltf"));
+        std::fs::write(&fa, "one").unwrap();
+        std::fs::write(&fb, "two").unwrap();
+        let (sa, sb) = (fa.to_str().unwrap(), fb.to_str().unwrap());
+        assert_ne!(dir_of(sa, 256), dir_of(sb, 256), "same name, other file");
+        let before = dir_of(sa, 256);
+        std::fs::write(&fa, "one, edited").unwrap();
+        assert_ne!(dir_of(sa, 256), before, "edited file");
+        assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
+        assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
+        assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 }

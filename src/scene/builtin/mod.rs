@@ -2,6 +2,8 @@
 //! by the generator in this file (`irad scenes --generate scenes/` writes them again; a test
 //! checks that the committed files are exactly what the generator makes).
 
+mod atrium;
+
 use super::{load, Scene};
 use base64::Engine;
 use glam::{Quat, Vec3};
@@ -18,32 +20,37 @@ pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "cornell",
         stresses: "the classic Cornell box (Mitsuba 3's), still: the baseline every metric is held to",
-        gltf: include_str!("../../scenes/cornell.gltf"),
+        gltf: include_str!("../../../scenes/cornell.gltf"),
     },
     Builtin {
         name: "cornell-orbit",
         stresses: "the camera swings 12 degrees either side of the box over 3 s: importance changes with the view, so CDF sampling re-maps its VPLs",
-        gltf: include_str!("../../scenes/cornell-orbit.gltf"),
+        gltf: include_str!("../../../scenes/cornell-orbit.gltf"),
     },
     Builtin {
         name: "cornell-light",
         stresses: "the light slides across the ceiling over 3 s (cubic spline): every light path moves, chains must follow",
-        gltf: include_str!("../../scenes/cornell-light.gltf"),
+        gltf: include_str!("../../../scenes/cornell-light.gltf"),
     },
     Builtin {
         name: "cornell-box",
         stresses: "the small box slides and turns across the floor over 3 s: moving occluder, BVH rebuilds and moving ISM points",
-        gltf: include_str!("../../scenes/cornell-box.gltf"),
+        gltf: include_str!("../../../scenes/cornell-box.gltf"),
     },
     Builtin {
         name: "two-rooms",
         stresses: "importance decides: the light is in one room, the camera walks through the door into the other over 3 s; most plain VPLs land where the camera cannot see",
-        gltf: include_str!("../../scenes/two-rooms.gltf"),
+        gltf: include_str!("../../../scenes/two-rooms.gltf"),
     },
     Builtin {
         name: "furnace",
         stresses: "white furnace: a closed box, albedo 0.5, every wall emits 1: radiance is exactly 2 everywhere",
-        gltf: include_str!("../../scenes/furnace.gltf"),
+        gltf: include_str!("../../../scenes/furnace.gltf"),
+    },
+    Builtin {
+        name: "atrium",
+        stresses: "Sponza-class: a 30 x 14 m court with two storeys of arcades (about 130k triangles), lit by a sun high above the open roof that slides across the sky over 4 s: scale, deep occlusion, light mostly arriving by bounces",
+        gltf: include_str!("../../../scenes/atrium.gltf"),
     },
 ];
 
@@ -83,63 +90,76 @@ pub fn generate(name: &str) -> Option<String> {
         "cornell" => {
             cornell(&mut b);
         }
-        "cornell-orbit" => {
-            let n = cornell(&mut b);
-            let times: Vec<f32> = (0..=12).map(|i| i as f32 * 0.25).collect();
-            let angle = |t: f32| 12f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
-            let pos: Vec<f32> = times
-                .iter()
-                .flat_map(|&t| [3.9 * angle(t).sin(), 0.0, 3.9 * angle(t).cos()])
-                .collect();
-            let rot: Vec<f32> = times
-                .iter()
-                .flat_map(|&t| Quat::from_rotation_y(angle(t)).to_array())
-                .collect();
-            b.animate("orbit", n.camera, "translation", "LINEAR", &times, &pos);
-            b.animate("orbit", n.camera, "rotation", "LINEAR", &times, &rot);
-        }
-        "cornell-light" => {
-            let n = cornell(&mut b);
-            // CUBICSPLINE keys (in-tangent, value, out-tangent): ease from x=-0.5 to 0.5 and back.
-            let times = [0.0, 1.5, 3.0];
-            let key = |x: f32| [0.0, 0.0, 0.0, x, 0.99, 0.01, 0.0, 0.0, 0.0];
-            let values: Vec<f32> = [-0.5, 0.5, -0.5].iter().flat_map(|&x| key(x)).collect();
-            b.animate(
-                "slide",
-                n.light,
-                "translation",
-                "CUBICSPLINE",
-                &times,
-                &values,
-            );
-        }
-        "cornell-box" => {
-            let n = cornell(&mut b);
-            let times = [0.0, 1.5, 3.0];
-            let pos = [0.335, -0.7, 0.38, -0.25, -0.7, 0.6, 0.335, -0.7, 0.38];
-            let rot: Vec<f32> = [-17.0f32, 30.0, -17.0]
-                .iter()
-                .flat_map(|a| Quat::from_rotation_y(a.to_radians()).to_array())
-                .collect();
-            b.animate("slide", n.small_box, "translation", "LINEAR", &times, &pos);
-            b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
-        }
+        "cornell-orbit" => cornell_orbit(&mut b),
+        "cornell-light" => cornell_light(&mut b),
+        "cornell-box" => cornell_box(&mut b),
         "two-rooms" => two_rooms(&mut b),
-        "furnace" => {
-            let m = b.material("furnace", [0.5; 3], [1.0; 3]);
-            let mut nodes = Vec::new();
-            for (c, u, v) in cube_faces() {
-                // Inward-facing walls: swap u and v to flip the winding.
-                let mesh = b.quad_mesh("wall", c, v, u, m);
-                nodes.push(b.node(json!({ "name": "wall", "mesh": mesh })));
-            }
-            let cam = b.camera_node([0.0, 0.0, 0.5], Quat::IDENTITY, 60.0);
-            nodes.push(cam);
-            b.roots = nodes;
-        }
+        "atrium" => atrium::atrium(&mut b),
+        "furnace" => furnace(&mut b),
         _ => return None,
     }
     Some(b.finish(name))
+}
+
+/// The Cornell box with the camera swinging 12 degrees either side over 3 s.
+fn cornell_orbit(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    let times: Vec<f32> = (0..=12).map(|i| i as f32 * 0.25).collect();
+    let angle = |t: f32| 12f32.to_radians() * (std::f32::consts::TAU * t / 3.0).sin();
+    let pos: Vec<f32> = times
+        .iter()
+        .flat_map(|&t| [3.9 * angle(t).sin(), 0.0, 3.9 * angle(t).cos()])
+        .collect();
+    let rot: Vec<f32> = times
+        .iter()
+        .flat_map(|&t| Quat::from_rotation_y(angle(t)).to_array())
+        .collect();
+    b.animate("orbit", n.camera, "translation", "LINEAR", &times, &pos);
+    b.animate("orbit", n.camera, "rotation", "LINEAR", &times, &rot);
+}
+
+/// The Cornell box with the light sliding across the ceiling (cubic spline).
+fn cornell_light(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    // CUBICSPLINE keys (in-tangent, value, out-tangent): ease from x=-0.5 to 0.5 and back.
+    let times = [0.0, 1.5, 3.0];
+    let key = |x: f32| [0.0, 0.0, 0.0, x, 0.99, 0.01, 0.0, 0.0, 0.0];
+    let values: Vec<f32> = [-0.5, 0.5, -0.5].iter().flat_map(|&x| key(x)).collect();
+    b.animate(
+        "slide",
+        n.light,
+        "translation",
+        "CUBICSPLINE",
+        &times,
+        &values,
+    );
+}
+
+/// The Cornell box with the small box sliding and turning across the floor.
+fn cornell_box(b: &mut GltfBuilder) {
+    let n = cornell(b);
+    let times = [0.0, 1.5, 3.0];
+    let pos = [0.335, -0.7, 0.38, -0.25, -0.7, 0.6, 0.335, -0.7, 0.38];
+    let rot: Vec<f32> = [-17.0f32, 30.0, -17.0]
+        .iter()
+        .flat_map(|a| Quat::from_rotation_y(a.to_radians()).to_array())
+        .collect();
+    b.animate("slide", n.small_box, "translation", "LINEAR", &times, &pos);
+    b.animate("slide", n.small_box, "rotation", "LINEAR", &times, &rot);
+}
+
+/// White furnace: a closed box of albedo 0.5 whose walls all emit 1.
+fn furnace(b: &mut GltfBuilder) {
+    let m = b.material("furnace", [0.5; 3], [1.0; 3]);
+    let mut nodes = Vec::new();
+    for (c, u, v) in cube_faces() {
+        // Inward-facing walls: swap u and v to flip the winding.
+        let mesh = b.quad_mesh("wall", c, v, u, m);
+        nodes.push(b.node(json!({ "name": "wall", "mesh": mesh })));
+    }
+    let cam = b.camera_node([0.0, 0.0, 0.5], Quat::IDENTITY, 60.0);
+    nodes.push(cam);
+    b.roots = nodes;
 }
 
 /// The six faces of the cube [-1,1]^3 as (center, u, v) with outward normal u x v.
@@ -211,7 +231,11 @@ fn two_rooms(b: &mut GltfBuilder) {
     let cam = b.camera_node([-1.5, 1.3, 0.2], look_x, 60.0);
     roots.push(cam);
     b.roots = roots;
-    // Walk through the door, turning toward the box.
+    walk(b, cam);
+}
+
+/// The two-rooms camera walks through the door over 3 s, turning toward the box.
+fn walk(b: &mut GltfBuilder, cam: usize) {
     let times = [0.0, 3.0];
     b.animate(
         "walk",

@@ -1,0 +1,50 @@
+// Radiosity display: the element mesh rasterized with its Gouraud colours (radiance at the
+// vertices, emission included, interpolated across each element) as float bits in an
+// integer target (renderable everywhere, GL included); back faces are black (elements are
+// one-sided). `resolve` copies the float target into the per-pixel buffer the
+// other passes use.
+
+struct RadCamera {
+    view_proj: mat4x4f,
+    position: vec4f,
+}
+@group(0) @binding(0) var<uniform> rad_cam: RadCamera;
+
+struct RadOut {
+    @builtin(position) clip: vec4f,
+    @location(0) color: vec3f,
+    @location(1) world: vec3f,
+    @location(2) @interpolate(flat) normal: vec3f,
+}
+
+@vertex
+fn vs(@location(0) pos: vec3f, @location(1) color: vec3f, @location(2) normal: vec3f) -> RadOut {
+    var o: RadOut;
+    o.clip = rad_cam.view_proj * vec4f(pos, 1.0);
+    o.color = color;
+    o.world = pos;
+    o.normal = normal;
+    return o;
+}
+
+@fragment
+fn fs(i: RadOut) -> @location(0) vec4u {
+    // The element's front faces the camera (independent of the projection's winding).
+    if dot(i.normal, rad_cam.position.xyz - i.world) <= 0.0 {
+        return vec4u(0u, 0u, 0u, 1u);
+    }
+    return vec4u(bitcast<vec3u>(i.color), 1u);
+}
+
+@group(0) @binding(1) var<uniform> rad_size: vec4u;
+@group(0) @binding(2) var rad_image: texture_2d<u32>;
+@group(0) @binding(3) var<storage, read_write> rad_out: array<vec4f>;
+
+@compute @workgroup_size(8, 8)
+fn resolve(@builtin(global_invocation_id) gid: vec3u) {
+    if gid.x >= rad_size.x || gid.y >= rad_size.y {
+        return;
+    }
+    let t = textureLoad(rad_image, vec2i(gid.xy), 0);
+    rad_out[gid.y * rad_size.x + gid.x] = vec4f(bitcast<vec3f>(t.xyz), f32(t.w));
+}

@@ -1,0 +1,333 @@
+//! Radiosity display pass (`shaders/radiosity.wgsl`): a classical radiosity solution's
+//! element mesh rasterized from the camera with Gouraud colours (the radiance interpolated
+//! from the vertices, emission included), then resolved into a per-pixel HDR buffer. Its CPU
+//! twin is `radiosity::display::render_cpu`.
+
+use super::{gbuffer::target, Gpu};
+
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries,
+        })
+}
+use crate::image::Hdr;
+use crate::radiosity::display::Shaded;
+use crate::scene::Frame;
+use anyhow::Result;
+use glam::{Mat4, Vec3};
+
+/// Float bits in an integer target: Rgba32Float is not renderable on GL.
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Vertex {
+    pos: [f32; 3],
+    color: [f32; 3],
+    normal: [f32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CameraUniform {
+    view_proj: Mat4,
+    position: [f32; 4],
+}
+
+pub struct RadiosityPass {
+    width: u32,
+    height: u32,
+    raster: wgpu::RenderPipeline,
+    camera: wgpu::Buffer,
+    raster_group: wgpu::BindGroup,
+    color: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    resolve: wgpu::ComputePipeline,
+    resolve_group: wgpu::BindGroup,
+    vertices: Option<wgpu::Buffer>,
+    count: u32,
+    /// The frame's radiance per pixel (vec4, alpha 1 where a surface was hit).
+    pub output: wgpu::Buffer,
+}
+
+impl RadiosityPass {
+    pub fn new(gpu: &Gpu, width: u32, height: u32) -> Self {
+        let module = gpu.shader("radiosity", include_str!("../../shaders/radiosity.wgsl"));
+        let raster_layout = layout(
+            gpu,
+            "radiosity raster",
+            &[entry(
+                0,
+                wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
+                buffer_ty(wgpu::BufferBindingType::Uniform),
+            )],
+        );
+        let pl = gpu
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("radiosity raster"),
+                bind_group_layouts: &[Some(&raster_layout)],
+                immediate_size: 0,
+            });
+        let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+        let raster = gpu
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("radiosity raster"),
+                layout: Some(&pl),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<Vertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &attributes,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Less),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(FORMAT.into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        let camera = gpu.buffer(
+            "radiosity camera",
+            std::mem::size_of::<CameraUniform>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        let raster_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("radiosity raster"),
+            layout: &raster_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera.as_entire_binding(),
+            }],
+        });
+        let color = target(gpu, "radiosity", width, height, 1, FORMAT, true)
+            .create_view(&Default::default());
+        let depth = target(
+            gpu,
+            "radiosity depth",
+            width,
+            height,
+            1,
+            wgpu::TextureFormat::Depth32Float,
+            false,
+        )
+        .create_view(&Default::default());
+        let output = gpu.buffer(
+            "radiosity output",
+            width as u64 * height as u64 * 16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let size = gpu.buffer(
+            "radiosity size",
+            16,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        );
+        gpu.queue
+            .write_buffer(&size, 0, bytemuck::cast_slice(&[width, height, 0u32, 0u32]));
+        // The resolve binds 1..3 (binding 0 is the raster's camera).
+        let cs = wgpu::ShaderStages::COMPUTE;
+        let resolve_layout = layout(
+            gpu,
+            "radiosity resolve",
+            &[
+                entry(1, cs, buffer_ty(wgpu::BufferBindingType::Uniform)),
+                entry(
+                    2,
+                    cs,
+                    wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                ),
+                entry(
+                    3,
+                    cs,
+                    buffer_ty(wgpu::BufferBindingType::Storage { read_only: false }),
+                ),
+            ],
+        );
+        let resolve =
+            gpu.compute_pipeline("radiosity resolve", &module, "resolve", &[&resolve_layout]);
+        let resolve_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("radiosity resolve"),
+            layout: &resolve_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: size.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::TextureView(&color),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: output.as_entire_binding(),
+                },
+            ],
+        });
+        RadiosityPass {
+            width,
+            height,
+            raster,
+            camera,
+            raster_group,
+            color,
+            depth,
+            resolve,
+            resolve_group,
+            vertices: None,
+            count: 0,
+            output,
+        }
+    }
+
+    /// Uploads a shaded solution (done once per solve; the camera may move freely after).
+    pub fn upload(&mut self, gpu: &Gpu, shaded: &Shaded) {
+        let f = &shaded.elements;
+        let verts: Vec<Vertex> = (0..f.tris.len())
+            .flat_map(|e| {
+                let le = f.emission(e);
+                let n = f.normals[e].to_array();
+                (0..3).map(move |k| (e, k, le, n))
+            })
+            .map(|(e, k, le, n)| Vertex {
+                pos: f.tris[e][k].to_array(),
+                color: (shaded.corners[e][k] + le).to_array(),
+                normal: n,
+            })
+            .collect();
+        self.count = verts.len() as u32;
+        let bytes: &[u8] = bytemuck::cast_slice(&verts);
+        let fits = self
+            .vertices
+            .as_ref()
+            .is_some_and(|b| b.size() >= bytes.len() as u64);
+        if !fits {
+            self.vertices = Some(gpu.buffer(
+                "radiosity vertices",
+                bytes.len() as u64,
+                wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            ));
+        }
+        if let Some(b) = &self.vertices {
+            if !bytes.is_empty() {
+                gpu.queue.write_buffer(b, 0, bytes);
+            }
+        }
+    }
+
+    /// Rasterizes the uploaded mesh from `frame`'s camera and resolves it into `output`.
+    pub fn encode(&self, gpu: &Gpu, enc: &mut wgpu::CommandEncoder, frame: &Frame) {
+        let (lo, hi) = frame.bounds();
+        let far = (hi - lo)
+            .length()
+            .max((frame.camera.position - (lo + hi) * 0.5).length() * 2.0)
+            .max(1e-3)
+            * 1.5;
+        let near = (far * 1e-5).max(1e-3);
+        let cam = &frame.camera;
+        let u = CameraUniform {
+            view_proj: cam.projection(self.width, self.height, near, far) * cam.view(),
+            position: cam.position.extend(1.0).to_array(),
+        };
+        gpu.queue
+            .write_buffer(&self.camera, 0, bytemuck::bytes_of(&u));
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("radiosity"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if let (Some(v), true) = (&self.vertices, self.count > 0) {
+                pass.set_pipeline(&self.raster);
+                pass.set_bind_group(0, &self.raster_group, &[]);
+                pass.set_vertex_buffer(0, v.slice(..));
+                pass.draw(0..self.count, 0..1);
+            }
+        }
+        super::dispatch(
+            enc,
+            "radiosity resolve",
+            &self.resolve,
+            &[&self.resolve_group],
+            (self.width.div_ceil(8), self.height.div_ceil(8), 1),
+        );
+    }
+
+    /// Renders `frame`'s view of the uploaded solution and reads it back.
+    pub fn render(&self, gpu: &Gpu, frame: &Frame) -> Result<Hdr> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        self.encode(gpu, &mut enc, frame);
+        gpu.queue.submit([enc.finish()]);
+        gpu.wait()?;
+        let bytes = gpu.read_buffer(&self.output, self.width as u64 * self.height as u64 * 16)?;
+        let v: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        Ok(Hdr {
+            width: self.width,
+            height: self.height,
+            data: v.iter().map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+        })
+    }
+}

@@ -1,0 +1,459 @@
+//! Meshing: the frame's triangles cut into elements by longest-edge bisection (Rivara's
+//! LEPP refinement). A split always cuts an edge in every element that holds it, so the mesh
+//! stays conforming: no element has a vertex in the middle of a neighbour's edge (no
+//! T-vertices), and Gouraud shading at shared vertices has no cracks. Elements keep the scene
+//! triangle they came from. Discontinuity meshing was not attempted; shadow boundaries are
+//! followed by adaptive refinement only ([`Mesh::refine_adaptive`]).
+
+use crate::scene::Frame;
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// One element: a triangle of the mesh, one-sided (it faces along `normal`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Element {
+    /// Vertex indices, counter-clockwise seen from the front.
+    pub v: [u32; 3],
+    /// The scene triangle it came from.
+    pub source: u32,
+    pub normal: Vec3,
+    pub area: f32,
+}
+
+/// A conforming triangle mesh of elements.
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub verts: Vec<Vec3>,
+    pub elems: Vec<Element>,
+    /// Elements holding each edge (key: smaller vertex first).
+    edges: HashMap<(u32, u32), Vec<u32>>,
+    /// Midpoint vertex of each edge split so far.
+    midpoints: HashMap<(u32, u32), u32>,
+}
+
+fn key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+impl Mesh {
+    /// The frame's triangles as elements, vertices welded where positions are equal.
+    /// Degenerate triangles (zero area) get no element.
+    pub fn from_frame(frame: &Frame) -> Mesh {
+        let mut m = Mesh::default();
+        let mut index: HashMap<[u32; 3], u32> = HashMap::new();
+        for (i, t) in frame.tris.iter().enumerate() {
+            if frame.areas[i] <= 0.0 || !frame.areas[i].is_finite() {
+                continue;
+            }
+            let v = t.map(|p| {
+                *index
+                    .entry(p.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        m.verts.push(p);
+                        m.verts.len() as u32 - 1
+                    })
+            });
+            if v[0] == v[1] || v[1] == v[2] || v[0] == v[2] {
+                continue;
+            }
+            m.push(v, i as u32, frame.normals[i]);
+        }
+        m
+    }
+
+    /// A mesh from triangles (corners, scene triangle, unit normal), welded where positions
+    /// are equal. It may have T-vertices (hierarchical radiosity's leaves do).
+    pub fn from_triangles(tris: &[([Vec3; 3], u32, Vec3)]) -> Mesh {
+        let mut m = Mesh::default();
+        let mut index: HashMap<[u32; 3], u32> = HashMap::new();
+        for &(t, source, normal) in tris {
+            let v = t.map(|p| {
+                *index
+                    .entry(p.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        m.verts.push(p);
+                        m.verts.len() as u32 - 1
+                    })
+            });
+            m.push(v, source, normal);
+        }
+        m
+    }
+
+    /// The frame meshed to elements whose edges are at most `target` long, with at most
+    /// `budget` elements.
+    pub fn uniform(frame: &Frame, target: f32, budget: usize) -> Mesh {
+        let mut m = Mesh::from_frame(frame);
+        m.refine_to(target, budget);
+        m
+    }
+
+    fn push(&mut self, v: [u32; 3], source: u32, normal: Vec3) -> u32 {
+        let id = self.elems.len() as u32;
+        self.elems.push(Element {
+            v,
+            source,
+            normal,
+            area: 0.0,
+        });
+        self.set(id, v);
+        id
+    }
+
+    /// Sets element `id`'s vertices (its edges must not be in the map yet).
+    fn set(&mut self, id: u32, v: [u32; 3]) {
+        let e = &mut self.elems[id as usize];
+        e.v = v;
+        let [a, b, c] = v.map(|i| self.verts[i as usize]);
+        e.area = 0.5 * (b - a).cross(c - a).length();
+        for k in 0..3 {
+            self.edges
+                .entry(key(v[k], v[(k + 1) % 3]))
+                .or_default()
+                .push(id);
+        }
+    }
+
+    fn unset(&mut self, id: u32) {
+        let v = self.elems[id as usize].v;
+        for k in 0..3 {
+            if let Some(list) = self.edges.get_mut(&key(v[k], v[(k + 1) % 3])) {
+                list.retain(|&x| x != id);
+            }
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.elems.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.elems.is_empty()
+    }
+
+    /// The element's corner positions.
+    pub fn corners(&self, e: usize) -> [Vec3; 3] {
+        self.elems[e].v.map(|i| self.verts[i as usize])
+    }
+
+    pub fn centroid(&self, e: usize) -> Vec3 {
+        let [a, b, c] = self.corners(e);
+        (a + b + c) / 3.0
+    }
+
+    fn edge_len2(&self, a: u32, b: u32) -> f32 {
+        (self.verts[a as usize] - self.verts[b as usize]).length_squared()
+    }
+
+    /// The element's longest edge (ties broken by vertex index, so both sides agree).
+    fn longest(&self, e: u32) -> (u32, u32) {
+        let v = self.elems[e as usize].v;
+        (0..3)
+            .map(|k| key(v[k], v[(k + 1) % 3]))
+            .max_by(|&(a, b), &(c, d)| {
+                self.edge_len2(a, b)
+                    .total_cmp(&self.edge_len2(c, d))
+                    .then((a, b).cmp(&(c, d)))
+            })
+            .unwrap()
+    }
+
+    /// Longest edge length of element `e`.
+    pub fn diameter(&self, e: usize) -> f32 {
+        let (a, b) = self.longest(e as u32);
+        self.edge_len2(a, b).sqrt()
+    }
+
+    /// Splits edge (a, b) at its midpoint in every element holding it. Returns the new
+    /// elements (each split element keeps its index for one half).
+    fn split_edge(&mut self, a: u32, b: u32) -> Vec<u32> {
+        let k = key(a, b);
+        let holders = self.edges.remove(&k).unwrap_or_default();
+        let m = *self.midpoints.entry(k).or_insert_with(|| {
+            self.verts
+                .push((self.verts[a as usize] + self.verts[b as usize]) * 0.5);
+            self.verts.len() as u32 - 1
+        });
+        let mut born = Vec::new();
+        for id in holders {
+            self.unset(id);
+            let v = self.elems[id as usize].v;
+            // Rotate so that the split edge is (v[i], v[i+1]).
+            let i = (0..3)
+                .find(|&i| key(v[i], v[(i + 1) % 3]) == k)
+                .expect("edge map names an element holding the edge");
+            let (x, y, z) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
+            self.set(id, [x, m, z]);
+            let (source, normal) = {
+                let e = &self.elems[id as usize];
+                (e.source, e.normal)
+            };
+            born.push(self.push([m, y, z], source, normal));
+        }
+        born
+    }
+
+    /// Rivara's longest-edge propagation path: bisects element `e` (and, to keep the mesh
+    /// conforming and its angles bounded, the neighbours along the path of increasing longest
+    /// edges first). Returns the number of elements added.
+    pub fn bisect(&mut self, e: u32) -> usize {
+        let before = self.elems.len();
+        let target_len = {
+            let (a, b) = self.longest(e);
+            self.edge_len2(a, b)
+        };
+        // Split until `e`'s longest edge got shorter (e keeps its index for one half).
+        let mut guard = 0;
+        loop {
+            let (a, b) = self.longest(e);
+            if self.edge_len2(a, b) < target_len || guard > 64 {
+                break;
+            }
+            guard += 1;
+            // Walk the path from e: neighbour across the longest edge, while the neighbour's
+            // longest edge is longer.
+            let mut cur = e;
+            let mut steps = 0;
+            loop {
+                let (a, b) = self.longest(cur);
+                let l = self.edge_len2(a, b);
+                let next = self.edges[&(a, b)].iter().copied().find(|&n| {
+                    n != cur && {
+                        let (c, d) = self.longest(n);
+                        (c, d) != (a, b) && self.edge_len2(c, d) > l
+                    }
+                });
+                match next {
+                    Some(n) if steps < 10_000 => {
+                        cur = n;
+                        steps += 1;
+                    }
+                    _ => {
+                        self.split_edge(a, b);
+                        break;
+                    }
+                }
+            }
+        }
+        self.elems.len() - before
+    }
+
+    /// Bisects until every element's longest edge is at most `target`, or the mesh holds
+    /// `budget` elements. Longest elements first.
+    pub fn refine_to(&mut self, target: f32, budget: usize) {
+        if target.is_nan() || target <= 0.0 {
+            return;
+        }
+        loop {
+            let mut todo: Vec<(f32, u32)> = (0..self.elems.len())
+                .map(|e| (self.diameter(e), e as u32))
+                .filter(|&(d, _)| d > target)
+                .collect();
+            if todo.is_empty() {
+                return;
+            }
+            todo.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+            for (_, e) in todo {
+                if self.elems.len() >= budget {
+                    return;
+                }
+                if self.diameter(e as usize) > target {
+                    self.bisect(e);
+                }
+            }
+        }
+    }
+
+    /// Adaptive refinement: bisects elements whose radiance (luminance of `value`) differs
+    /// from an edge neighbour on the same plane by more than `threshold` (absolute), largest
+    /// difference first, while elements are larger than `min_diameter` and the mesh holds
+    /// fewer than `budget` elements. Returns the number of elements split.
+    pub fn refine_adaptive(
+        &mut self,
+        value: &[Vec3],
+        threshold: f32,
+        min_diameter: f32,
+        budget: usize,
+    ) -> usize {
+        let lum: Vec<f32> = value.iter().map(|&v| crate::math::luminance(v)).collect();
+        let mut worst = vec![0.0f32; self.elems.len()];
+        for list in self.edges.values() {
+            for (i, &p) in list.iter().enumerate() {
+                for &q in &list[i + 1..] {
+                    let (ep, eq) = (&self.elems[p as usize], &self.elems[q as usize]);
+                    if ep.normal.dot(eq.normal) < 0.999 {
+                        continue;
+                    }
+                    let d = (lum[p as usize] - lum[q as usize]).abs();
+                    worst[p as usize] = worst[p as usize].max(d);
+                    worst[q as usize] = worst[q as usize].max(d);
+                }
+            }
+        }
+        let mut todo: Vec<(f32, u32)> = worst
+            .iter()
+            .enumerate()
+            .filter(|&(e, &d)| d > threshold && self.diameter(e) > min_diameter)
+            .map(|(e, &d)| (d, e as u32))
+            .collect();
+        todo.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        let mut split = 0;
+        for (_, e) in todo {
+            if self.elems.len() >= budget {
+                break;
+            }
+            self.bisect(e);
+            split += 1;
+        }
+        split
+    }
+
+    /// For each vertex, the elements that hold it.
+    pub fn vertex_elements(&self) -> Vec<Vec<u32>> {
+        let mut out = vec![Vec::new(); self.verts.len()];
+        for (i, e) in self.elems.iter().enumerate() {
+            for &v in &e.v {
+                out[v as usize].push(i as u32);
+            }
+        }
+        out
+    }
+
+    /// Gouraud values: for each element corner, the area-weighted mean of `value` over the
+    /// elements around that vertex that lie in the same plane direction and came from a
+    /// triangle of the same material (so colours do not bleed around corners).
+    pub fn corner_values(&self, frame: &Frame, value: &[Vec3]) -> Vec<[Vec3; 3]> {
+        let around = self.vertex_elements();
+        self.elems
+            .iter()
+            .map(|e| {
+                let mat = frame.tri_material[e.source as usize];
+                e.v.map(|v| {
+                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                    for &o in &around[v as usize] {
+                        let eo = &self.elems[o as usize];
+                        if eo.normal.dot(e.normal) > 0.99
+                            && frame.tri_material[eo.source as usize] == mat
+                        {
+                            sum += value[o as usize] * eo.area;
+                            w += eo.area;
+                        }
+                    }
+                    if w > 0.0 {
+                        sum / w
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// The elements as a frame (same camera and materials), for ray casting onto elements:
+    /// a hit's triangle index is the element index.
+    pub fn as_frame(&self, frame: &Frame) -> Frame {
+        let tris: Vec<[Vec3; 3]> = (0..self.len()).map(|e| self.corners(e)).collect();
+        Frame {
+            time: frame.time,
+            tri_material: self
+                .elems
+                .iter()
+                .map(|e| frame.tri_material[e.source as usize])
+                .collect(),
+            normals: self.elems.iter().map(|e| e.normal).collect(),
+            areas: self.elems.iter().map(|e| e.area).collect(),
+            emitter_of_tri: vec![u32::MAX; tris.len()],
+            tris,
+            materials: frame.materials.clone(),
+            camera: frame.camera,
+            emitters: Default::default(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// No vertex lies strictly inside an element's edge (the Cornell box's input has none).
+    fn assert_conforming(m: &Mesh) {
+        for (e, el) in m.elems.iter().enumerate() {
+            let [a, b, c] = m.corners(e);
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                for (vi, &x) in m.verts.iter().enumerate() {
+                    if el.v.contains(&(vi as u32)) {
+                        continue;
+                    }
+                    let d = q - p;
+                    let t = (x - p).dot(d) / d.length_squared();
+                    assert!(
+                        !(t > 1e-4 && t < 1.0 - 1e-4 && (p + d * t - x).length() < 1e-6),
+                        "T-vertex {vi} at {x} on element {e}'s edge"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn uniform_mesh_conforms_keeps_area_and_meets_the_target() {
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let m = Mesh::uniform(&f, 0.3, 100_000);
+        let area: f32 = m.elems.iter().map(|e| e.area).sum();
+        let scene: f32 = f.areas.iter().sum();
+        assert!((area - scene).abs() < 1e-4 * scene, "{area} vs {scene}");
+        assert!((0..m.len()).all(|e| m.diameter(e) <= 0.3 + 1e-6));
+        assert!(m.len() > 5 * 2 * 4 * 4, "{} elements", m.len());
+        assert_conforming(&m);
+        // The budget stops it.
+        let small = Mesh::uniform(&f, 0.01, 500);
+        assert!(small.len() >= 500 && small.len() < 520, "{}", small.len());
+    }
+
+    #[test]
+    fn adaptive_refinement_splits_where_values_jump_and_stays_conforming() {
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let mut m = Mesh::uniform(&f, 0.5, 100_000);
+        let n0 = m.len();
+        // A step in x on the floor (y = -1): elements left of x = 0.1 are bright.
+        let value: Vec<Vec3> = (0..m.len())
+            .map(|e| {
+                let c = m.centroid(e);
+                if c.y < -0.99 && c.x < 0.1 {
+                    Vec3::ONE
+                } else {
+                    Vec3::ZERO
+                }
+            })
+            .collect();
+        let split = m.refine_adaptive(&value, 0.5, 0.05, 100_000);
+        assert!(split > 0 && m.len() > n0);
+        assert_conforming(&m);
+        // Splits concentrated on the floor.
+        let floor_new = (n0..m.len())
+            .filter(|&e| m.elems[e].normal.y > 0.99)
+            .count();
+        assert!(
+            floor_new * 2 > m.len() - n0,
+            "{floor_new} of {}",
+            m.len() - n0
+        );
+    }
+
+    #[test]
+    fn degenerate_and_empty_frames_give_no_elements() {
+        let mut f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        f.tris[0] = [Vec3::ZERO; 3];
+        f.areas[0] = 0.0;
+        f.normals[0] = Vec3::ZERO;
+        let m = Mesh::uniform(&f, 0.5, 1000);
+        assert!(m.elems.iter().all(|e| e.source != 0 && e.area > 0.0));
+        f.tris.clear();
+        f.areas.clear();
+        f.normals.clear();
+        f.tri_material.clear();
+        let m = Mesh::uniform(&f, 0.5, 1000);
+        assert!(m.is_empty());
+    }
+}

@@ -1,0 +1,343 @@
+//! Classical radiosity, the finite-element methods instant radiosity grew from: the frame
+//! meshed into elements ([`mesh`]), form factors ([`form_factor`]), three solvers
+//! ([`progressive`] shooting, [`hierarchical`] links, [`stochastic`] Jacobi) and the display of
+//! a solution ([`display`]: Gouraud values at vertices). Everything is in radiance units
+//! (`B / pi`): element `i` solves `L_i = Le_i + rho_i * sum_j F_ij L_j`.
+//! See docs/radiosity.md.
+
+pub mod display;
+pub mod form_factor;
+pub mod hierarchical;
+pub mod mesh;
+pub mod progressive;
+pub mod stochastic;
+
+use crate::scene::Frame;
+use crate::trace::Tracer;
+use glam::Vec3;
+use mesh::Mesh;
+use serde::Serialize;
+
+/// A global-illumination method: instant radiosity (VPLs) or a classical solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Instant radiosity: virtual point lights (the default)
+    #[default]
+    Instant,
+    /// Progressive refinement: shooting from the element of largest unshot power
+    Progressive,
+    /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991): links refined by B*F
+    Hierarchical,
+    /// Stochastic Jacobi radiosity: rays distribute power, no form factors stored
+    Stochastic,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Instant => "instant",
+            Method::Progressive => "progressive",
+            Method::Hierarchical => "hierarchical",
+            Method::Stochastic => "stochastic",
+        }
+    }
+}
+
+/// What a solve cost and how far it got.
+#[derive(Clone, Debug, Default, Serialize, PartialEq)]
+pub struct Stats {
+    pub method: String,
+    /// Elements the solution is displayed on.
+    pub elements: usize,
+    /// Form factors computed (progressive, hierarchical) or stored links (hierarchical).
+    pub form_factors: usize,
+    pub links: usize,
+    /// Shots (progressive), Jacobi iterations (stochastic, hierarchical).
+    pub iterations: usize,
+    /// Rays cast (visibility or transport).
+    pub rays: u64,
+    /// Adaptive refinement rounds run.
+    pub refinements: usize,
+    /// Unshot (or last update's) power over the emitted power when the solve stopped.
+    pub residual: f32,
+    pub seconds: f64,
+}
+
+/// A solution on a mesh: per element radiance, split into emission, the first bounce
+/// (direct light) and the rest, plus an ambient estimate of what is not yet distributed.
+#[derive(Clone, Debug, Default)]
+pub struct Solution {
+    pub mesh: Mesh,
+    /// Total radiance leaving each element (emission included).
+    pub radiance: Vec<Vec3>,
+    /// Emitted radiance of each element.
+    pub emission: Vec<Vec3>,
+    /// Radiance from light that came straight from the emitters (one bounce).
+    pub direct: Vec<Vec3>,
+    /// Radiance still to be distributed, estimated (Cohen et al. 1988's ambient term):
+    /// `rho_i * ambient` with ambient the area-mean unshot radiance over (1 - mean albedo).
+    pub ambient: Vec<Vec3>,
+    pub stats: Stats,
+}
+
+/// Which light a displayed solution carries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Part {
+    /// Everything reflected (direct and indirect): the solution alone shades the scene.
+    Reflected,
+    /// Reflected minus direct: the GPU direct pass adds direct light.
+    Indirect,
+}
+
+impl Solution {
+    /// Per-element radiance to display (emission excluded: the compose pass adds it).
+    pub fn display_values(&self, part: Part) -> Vec<Vec3> {
+        (0..self.radiance.len())
+            .map(|i| {
+                let mut v = self.radiance[i] - self.emission[i] + self.ambient[i];
+                if part == Part::Indirect {
+                    v -= self.direct[i];
+                }
+                v.max(Vec3::ZERO)
+            })
+            .collect()
+    }
+
+    /// Sum over elements of area times radiance (a power in radiance units).
+    pub fn power(&self, v: &[Vec3]) -> Vec3 {
+        self.mesh
+            .elems
+            .iter()
+            .zip(v)
+            .map(|(e, &l)| l * e.area)
+            .sum()
+    }
+}
+
+/// Emission and albedo of each element.
+pub(crate) fn element_materials(frame: &Frame, mesh: &Mesh) -> (Vec<Vec3>, Vec<Vec3>) {
+    mesh.elems
+        .iter()
+        .map(|e| {
+            (
+                frame.emission(e.source as usize),
+                frame.albedo(e.source as usize),
+            )
+        })
+        .unzip()
+}
+
+/// The ambient term: `rho_i * R * mean unshot`, `R = 1 / (1 - mean albedo)`.
+pub(crate) fn ambient(mesh: &Mesh, rho: &[Vec3], unshot: &[Vec3]) -> Vec<Vec3> {
+    let area: f32 = mesh.elems.iter().map(|e| e.area).sum();
+    if area <= 0.0 {
+        return vec![Vec3::ZERO; rho.len()];
+    }
+    let mean_rho: Vec3 = mesh
+        .elems
+        .iter()
+        .zip(rho)
+        .map(|(e, &r)| r * e.area)
+        .sum::<Vec3>()
+        / area;
+    let mean_unshot: Vec3 = mesh
+        .elems
+        .iter()
+        .zip(unshot)
+        .map(|(e, &u)| u * e.area)
+        .sum::<Vec3>()
+        / area;
+    let amb = mean_unshot / (Vec3::ONE - mean_rho).max(Vec3::splat(1e-3));
+    rho.iter().map(|&r| r * amb).collect()
+}
+
+/// Settings shared by the solvers.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    pub method: Method,
+    /// Initial element size (longest edge), in scene units.
+    pub element_size: f32,
+    /// Most elements the mesh may hold (adaptive refinement stops there).
+    pub max_elements: usize,
+    /// Adaptive refinement rounds (solve, split where neighbours differ, solve again).
+    pub refine_rounds: usize,
+    /// Split neighbours differing by more than this fraction of the mean radiance.
+    pub refine_threshold: f32,
+    /// Progressive: stop when the unshot power falls under this fraction of the emitted.
+    pub tolerance: f32,
+    /// Stochastic: rays per Jacobi iteration.
+    pub rays: usize,
+    pub seed: u64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            method: Method::Progressive,
+            element_size: 0.15,
+            max_elements: 6000,
+            refine_rounds: 2,
+            refine_threshold: 0.1,
+            tolerance: 1e-2,
+            rays: 400_000,
+            seed: 1,
+        }
+    }
+}
+
+/// Solves the frame with a classical method: mesh, solve, and adaptive refinement rounds
+/// (split where neighbours differ, solve again). `Method::Instant` has no solution: it gives
+/// an empty one.
+pub fn solve(frame: &Frame, tracer: &Tracer, s: &Settings) -> Solution {
+    let start = std::time::Instant::now();
+    let mut mesh = Mesh::uniform(frame, s.element_size, s.max_elements);
+    let mut rounds = 0;
+    let mut stats_rays = 0;
+    let mut sol = loop {
+        let sol = match s.method {
+            Method::Instant => Solution::default(),
+            Method::Progressive => {
+                progressive::solve(frame, tracer, mesh.clone(), &progressive_params(s))
+            }
+            Method::Hierarchical => {
+                hierarchical::solve(frame, tracer, &hierarchical::Params::from(s))
+            }
+            Method::Stochastic => {
+                stochastic::solve(frame, mesh.clone(), &stochastic::Params::from(s))
+            }
+        };
+        stats_rays += sol.stats.rays;
+        if rounds >= s.refine_rounds
+            || s.method == Method::Instant
+            || s.method == Method::Hierarchical
+        {
+            break sol;
+        }
+        let v = sol.display_values(Part::Reflected);
+        let area: f32 = mesh.elems.iter().map(|e| e.area).sum();
+        let mean = crate::math::luminance(sol.power(&v)) / area.max(1e-20);
+        let split = mesh.refine_adaptive(
+            &v,
+            s.refine_threshold * mean,
+            s.element_size / 16.0,
+            s.max_elements,
+        );
+        rounds += 1;
+        if split == 0 {
+            break sol;
+        }
+    };
+    sol.stats.refinements = rounds;
+    sol.stats.rays = stats_rays;
+    sol.stats.seconds = start.elapsed().as_secs_f64();
+    sol
+}
+
+/// A solution kept while the geometry and the emitters stay still: a moving camera reuses
+/// it (radiosity is view-independent), a moving object or light solves again.
+#[derive(Default)]
+pub struct Cache {
+    key: Option<(Vec<[Vec3; 3]>, Vec<u32>)>,
+    solution: Option<Solution>,
+    /// Solves run so far.
+    pub solves: usize,
+}
+
+impl Cache {
+    /// The solution for `frame`, solving only if its triangles or materials changed since
+    /// the last call. Returns it and whether it was solved now.
+    pub fn get(&mut self, frame: &Frame, tracer: &Tracer, s: &Settings) -> (&Solution, bool) {
+        let same = self
+            .key
+            .as_ref()
+            .is_some_and(|(t, m)| *t == frame.tris && *m == frame.tri_material);
+        if !same || self.solution.is_none() {
+            self.solution = Some(solve(frame, tracer, s));
+            self.key = Some((frame.tris.clone(), frame.tri_material.clone()));
+            self.solves += 1;
+        }
+        (self.solution.as_ref().expect("solved above"), !same)
+    }
+}
+
+fn progressive_params(s: &Settings) -> progressive::Params {
+    progressive::Params {
+        tolerance: s.tolerance,
+        max_shots: usize::MAX,
+        bright: form_factor::Quality { points: 4, rays: 7 },
+        dim: form_factor::Quality { points: 1, rays: 4 },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    #[test]
+    fn cache_solves_again_only_when_geometry_or_lights_move() {
+        let s = Settings {
+            element_size: 0.6,
+            refine_rounds: 0,
+            tolerance: 0.05,
+            ..Settings::default()
+        };
+        let orbit = builtin::load("cornell-orbit").unwrap().unwrap();
+        let mut cache = Cache::default();
+        for t in [0.0, 0.5, 1.0] {
+            let f = orbit.at(t);
+            let tr = Tracer::new(&f);
+            let (_, solved) = cache.get(&f, &tr, &s);
+            assert_eq!(solved, t == 0.0, "camera motion at t = {t}");
+        }
+        assert_eq!(cache.solves, 1);
+        let light = builtin::load("cornell-light").unwrap().unwrap();
+        let mut cache = Cache::default();
+        for t in [0.0, 0.5, 1.0] {
+            let f = light.at(t);
+            let tr = Tracer::new(&f);
+            assert!(cache.get(&f, &tr, &s).1, "the light moved at t = {t}");
+        }
+        assert_eq!(cache.solves, 3);
+    }
+
+    #[test]
+    fn empty_scene_and_no_emitters_solve_to_nothing_without_panicking() {
+        let mut f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let tr = Tracer::new(&f);
+        for method in [
+            Method::Progressive,
+            Method::Hierarchical,
+            Method::Stochastic,
+        ] {
+            let s = Settings {
+                method,
+                element_size: 0.6,
+                refine_rounds: 1,
+                rays: 10_000,
+                ..Settings::default()
+            };
+            // No emission: everything black, finite.
+            let mut dark = f.clone();
+            let mats: Vec<crate::scene::Material> = dark
+                .materials
+                .iter()
+                .map(|m| crate::scene::Material {
+                    emission: Vec3::ZERO,
+                    ..m.clone()
+                })
+                .collect();
+            dark.materials = std::sync::Arc::new(mats);
+            let sol = solve(&dark, &tr, &s);
+            assert!(sol.radiance.iter().all(|l| *l == Vec3::ZERO), "{method:?}");
+            // Empty scene.
+            f.tris.clear();
+            f.normals.clear();
+            f.areas.clear();
+            f.tri_material.clear();
+            let sol = solve(&f, &tr, &s);
+            assert!(sol.radiance.is_empty() && sol.mesh.is_empty(), "{method:?}");
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! A camera for a file that has none: one that sees what the lights light. Points spread
+//! over the surfaces by area are lit by a few emitter samples (with shadow rays); eyes around
+//! the lit region, outside it and inside it, are scored by the light of the points they see.
+
+use super::{Camera, Frame};
+use crate::trace::Tracer;
+use glam::{Vec2, Vec3};
+use rand::Rng;
+
+/// Surface points and emitter samples per point used to find what is lit.
+const POINTS: usize = 512;
+const LIGHT_SAMPLES: usize = 16;
+/// The field of view of the chosen camera (radians, 50 degrees).
+const YFOV: f32 = 0.8727;
+
+/// A lit surface point: position, the normal of its lit side, and its irradiance (luminance).
+struct Lit {
+    x: Vec3,
+    n: Vec3,
+    e: f32,
+}
+
+/// The camera that sees the most light among eyes around the lit region, or the camera
+/// framing the bounds from +Z when nothing is lit at this frame.
+pub fn lit_camera(frame: &Frame) -> Camera {
+    let (lo, hi) = frame.bounds();
+    let fallback = Camera::framing(lo, hi);
+    if frame.tris.is_empty() || frame.emitters.tris.is_empty() {
+        return fallback;
+    }
+    let tracer = Tracer::new(frame);
+    let lit = lit_points(frame, &tracer);
+    let Some(emax) = lit.iter().map(|l| l.e).reduce(f32::max) else {
+        return fallback;
+    };
+    // The region: points with at least 1% of the brightest's light.
+    let bright: Vec<&Lit> = lit.iter().filter(|l| l.e >= 0.01 * emax).collect();
+    let (blo, bhi) = super::bounds(bright.iter().map(|l| l.x));
+    let center = (blo + bhi) * 0.5;
+    let radius = ((bhi - blo).length() * 0.5).max(1e-3);
+    let dist = 1.1 * radius / (YFOV * 0.5).sin();
+    let mut best = (0.0, fallback);
+    for f in [1.0, 0.6, 0.3] {
+        for dir in directions() {
+            let cam = look_from(center + dir * dist * f, center);
+            let s = score(&cam, &lit, &tracer);
+            if s > best.0 {
+                best = (s, cam);
+            }
+        }
+    }
+    best.1
+}
+
+/// The 26 directions to the corners, edges and faces of a cube, +Z first.
+fn directions() -> Vec<Vec3> {
+    let mut d = vec![Vec3::Z];
+    for i in -1..=1 {
+        for j in -1..=1 {
+            for k in -1..=1 {
+                let v = Vec3::new(i as f32, j as f32, k as f32);
+                if v != Vec3::ZERO && v != Vec3::Z {
+                    d.push(v.normalize());
+                }
+            }
+        }
+    }
+    d
+}
+
+fn look_from(eye: Vec3, target: Vec3) -> Camera {
+    let fwd = (target - eye).normalize();
+    let up = if fwd.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    Camera::look_at(eye, target, up, YFOV)
+}
+
+/// Points spread over the surfaces by area, with the light they receive.
+fn lit_points(frame: &Frame, tracer: &Tracer) -> Vec<Lit> {
+    let mut r = crate::math::rng(&[0xf4a3e]);
+    let mut cdf = Vec::with_capacity(frame.areas.len());
+    let mut acc = 0.0f64;
+    for &a in &frame.areas {
+        acc += a as f64;
+        cdf.push(acc);
+    }
+    let samples = frame.emitter_samples(7, LIGHT_SAMPLES);
+    (0..POINTS)
+        .filter_map(|_| {
+            let u = r.random::<f64>() * acc;
+            let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+            let b = crate::math::triangle_barycentrics(Vec2::new(r.random(), r.random()));
+            let x = frame.point(tri, b.x, b.y);
+            irradiance(frame.normals[tri], x, &samples, tracer)
+        })
+        .collect()
+}
+
+/// The light at `x` on whichever side of the surface gets more, or None if unlit.
+fn irradiance(n: Vec3, x: Vec3, samples: &[super::EmitterSample], tracer: &Tracer) -> Option<Lit> {
+    let mut side = [0.0f32; 2];
+    for s in samples {
+        let w = s.position - x;
+        let d2 = w.length_squared();
+        let cos_l = -s.normal.dot(w) / d2.sqrt();
+        let cos_x = n.dot(w) / d2.sqrt();
+        if cos_l <= 0.0 || d2 <= 0.0 || tracer.occluded(x, n, s.position, s.normal) {
+            continue;
+        }
+        let e = crate::math::luminance(s.radiance) * cos_l * cos_x.abs() / d2;
+        side[(cos_x < 0.0) as usize] += e;
+    }
+    let (e, n) = if side[0] >= side[1] {
+        (side[0], n)
+    } else {
+        (side[1], -n)
+    };
+    (e > 0.0 && e.is_finite()).then_some(Lit { x, n, e })
+}
+
+/// The light of the lit points that `cam` sees: in its view, facing it, not occluded.
+fn score(cam: &Camera, lit: &[Lit], tracer: &Tracer) -> f32 {
+    let half = YFOV * 0.5;
+    lit.iter()
+        .filter(|l| {
+            let v = cam.position - l.x;
+            let to = -v.normalize();
+            l.n.dot(v) > 0.0
+                && cam.forward.dot(to).clamp(-1.0, 1.0).acos() < half
+                && !tracer.occluded(l.x, l.n, cam.position, to)
+        })
+        .map(|l| l.e)
+        .sum()
+}

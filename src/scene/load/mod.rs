@@ -1,0 +1,358 @@
+//! glTF 2.0 loading (.gltf with external or embedded buffers, and .glb), one module per part
+//! of glTF it reads: `buffers` (buffers, views, accessors), `material`, `mesh` (primitives),
+//! `nodes` (the node tree and cameras) and `animation`.
+//!
+//! What irad uses: triangle meshes, node transforms, baseColorFactor (albedo),
+//! emissiveFactor x KHR_materials_emissive_strength (emitted radiance), the first perspective
+//! camera, and node animations. Everything else is ignored with one warning per kind.
+
+mod animation;
+mod buffers;
+mod camera;
+mod material;
+mod mesh;
+mod nodes;
+
+pub use camera::FOV_RANGE;
+
+use super::{Camera, Scene};
+use glam::Vec3;
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::sync::Arc;
+
+/// A scene file irad cannot use: the file and what is wrong with it.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {reason}")]
+pub struct LoadError {
+    pub file: String,
+    pub reason: String,
+}
+
+/// Extensions irad understands; a file that requires any other is refused.
+const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_mesh_quantization"];
+
+/// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
+/// distances and areas overflow 32-bit floats.
+pub const MAX_COORD: f32 = 1e9;
+
+/// The most triangles a scene may instance (each costs about 100 bytes per frame).
+pub const MAX_TRIANGLES: usize = 1 << 24;
+
+/// The most times [`finish`] evaluates an animation at to check it.
+const CHECK_SAMPLES: usize = 64;
+
+/// What every part of the loader shares: the file's name for messages, and the warnings.
+struct Ctx<'a> {
+    file: &'a str,
+    warnings: BTreeSet<String>,
+    /// The file's KHR_lights_punctual lights by kind ("2 point, 1 spot"), empty if none.
+    punctual: String,
+}
+
+impl Ctx<'_> {
+    fn err(&self, reason: impl Into<String>) -> LoadError {
+        LoadError {
+            file: self.file.to_string(),
+            reason: reason.into(),
+        }
+    }
+
+    fn warn(&mut self, w: impl Into<String>) {
+        self.warnings.insert(w.into());
+    }
+}
+
+/// Loads a scene from a file path.
+pub fn load_path(path: &Path) -> Result<Scene, LoadError> {
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| LoadError {
+        file: file.clone(),
+        reason: format!("cannot read the file: {e}"),
+    })?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.clone());
+    load_slice(&bytes, &file, &name, path.parent())
+}
+
+/// Loads a scene from bytes; `file` names it in messages, `base` resolves external buffers.
+pub fn load_slice(
+    bytes: &[u8],
+    file: &str,
+    name: &str,
+    base: Option<&Path>,
+) -> Result<Scene, LoadError> {
+    let mut cx = Ctx {
+        file,
+        warnings: BTreeSet::new(),
+        punctual: String::new(),
+    };
+    let gltf = parse(&cx, bytes)?;
+    let doc = &gltf.document;
+    let buffers = buffers::load(&cx, doc, base, gltf.blob.clone())?;
+    warn_unused(&mut cx, doc);
+    let materials = material::read(&mut cx, doc)?;
+    let meshes = mesh::read(&mut cx, doc, &buffers, materials.len() - 1)?;
+    let mut graph = nodes::read(&mut cx, doc)?;
+    let channels = animation::read(&mut cx, doc, &buffers, &mut graph.nodes)?;
+    let scene = Scene {
+        name: name.to_string(),
+        materials: Arc::new(materials),
+        meshes,
+        nodes: graph.nodes,
+        roots: graph.roots,
+        camera_node: graph.camera_node,
+        default_camera: Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 0.7),
+        channels,
+        warnings: Vec::new(),
+        shift: Vec3::ZERO,
+    };
+    finish(cx, scene)
+}
+
+/// Parses the JSON (or .glb container) and refuses extensions irad does not support.
+fn parse(cx: &Ctx, bytes: &[u8]) -> Result<gltf::Gltf, LoadError> {
+    check_glb(cx, bytes)?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| cx.err(format!("not a glTF 2.0 file (.gltf JSON or .glb): {e}")))?;
+    for ext in gltf.document.extensions_required() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            return Err(cx.err(format!(
+                "requires the glTF extension {ext}, which irad does not support (it supports {})",
+                SUPPORTED_EXTENSIONS.join(", ")
+            )));
+        }
+    }
+    // The gltf crate's validation refuses required extensions it does not know itself.
+    let mut root = gltf.document.into_json();
+    root.extensions_required
+        .retain(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()));
+    // Its validation indexes POSITION accessors before checking the index (and panics).
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        let attrs = mesh.primitives.iter().flat_map(|p| p.attributes.values());
+        if let Some(a) = attrs
+            .map(|a| a.value())
+            .find(|&a| a >= root.accessors.len())
+        {
+            return Err(cx.err(format!(
+                "invalid glTF: mesh {m} refers to accessor {a}, but there are {}",
+                root.accessors.len()
+            )));
+        }
+    }
+    // Nor does it check animation targets, which the gltf crate unwraps.
+    for (i, a) in root.animations.iter().enumerate() {
+        for c in &a.channels {
+            let valid = matches!(c.target.path, gltf::json::validation::Checked::Valid(_));
+            if !valid || c.target.node.value() >= root.nodes.len() {
+                return Err(cx.err(format!(
+                    "invalid glTF: animation {i} targets node {} of {} or an unknown property",
+                    c.target.node.value(),
+                    root.nodes.len()
+                )));
+            }
+        }
+    }
+    let document =
+        gltf::Document::from_json(root).map_err(|e| cx.err(format!("invalid glTF: {e}")))?;
+    Ok(gltf::Gltf {
+        document,
+        blob: gltf.blob,
+    })
+}
+
+/// One warning per kind of thing in the file that irad ignores as a whole.
+fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
+    cx.punctual = punctual_lights(doc);
+    for ext in doc.extensions_used() {
+        if ext == "KHR_lights_punctual" && !cx.punctual.is_empty() {
+            let w = format!(
+                "KHR_lights_punctual lights ({}) are ignored: only emissive triangles light the scene",
+                cx.punctual
+            );
+            cx.warn(w);
+        } else if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            cx.warn(format!("extension {ext} is ignored"));
+        }
+    }
+    if doc.textures().next().is_some() {
+        cx.warn("textures are ignored: albedo is baseColorFactor");
+    }
+    if doc.skins().next().is_some() {
+        cx.warn("skins are ignored");
+    }
+}
+
+/// The KHR_lights_punctual lights the file defines, counted by type ("2 point, 1 spot").
+fn punctual_lights(doc: &gltf::Document) -> String {
+    let lights = doc
+        .extension_value("KHR_lights_punctual")
+        .and_then(|v| v.get("lights"))
+        .and_then(|v| v.as_array());
+    let mut kinds = std::collections::BTreeMap::new();
+    for l in lights.into_iter().flatten() {
+        let t = l.get("type").and_then(|t| t.as_str()).unwrap_or("unknown");
+        *kinds.entry(t.to_string()).or_insert(0usize) += 1;
+    }
+    kinds
+        .iter()
+        .map(|(t, n)| format!("{n} {t}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A .glb's header and chunk lengths fit in the file: a cut-off download says "truncated".
+fn check_glb(cx: &Ctx, bytes: &[u8]) -> Result<(), LoadError> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let word = |at: usize| {
+        let b = bytes.get(at..at.checked_add(4)?)?;
+        Some(u32::from_le_bytes(<[u8; 4]>::try_from(b).ok()?) as usize)
+    };
+    let truncated = |what: String| {
+        cx.err(format!(
+            "not a glTF 2.0 file: the .glb is truncated: {what}, but the file holds {} bytes",
+            bytes.len()
+        ))
+    };
+    let Some(total) = word(8) else {
+        return Err(truncated("its header needs 12 bytes".into()));
+    };
+    if total > bytes.len() {
+        return Err(truncated(format!("its header says {total} bytes")));
+    }
+    let mut at = 12;
+    while at < total {
+        let Some(len) = word(at).filter(|_| at + 8 <= total) else {
+            return Err(truncated(format!(
+                "a chunk header at byte {at} is cut short"
+            )));
+        };
+        if len > total - at - 8 {
+            return Err(truncated(format!(
+                "the chunk at byte {at} declares {len} bytes and only {} follow",
+                total - at - 8
+            )));
+        }
+        at += 8 + len;
+    }
+    Ok(())
+}
+
+/// Checks the evaluated scene (size, coordinates, camera, power, an emitter), moves a scene
+/// far from the origin back to it, and attaches the warnings.
+fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
+    check_size(&cx, &scene)?;
+    let frame0 = scene.at(0.0);
+    if frame0.tris.is_empty() {
+        return Err(cx.err("no triangles in the scene's node tree"));
+    }
+    recenter(&mut cx, &mut scene, frame0.bounds());
+    let frame = scene.at(0.0);
+    let (lo, hi) = frame.bounds();
+    scene.default_camera = Camera::framing(lo, hi);
+    if scene.camera_node.is_none() {
+        scene.default_camera = crate::scene::framing::lit_camera(&frame);
+        cx.warn("no perspective camera: using one that frames what the lights light");
+    }
+    check_times(&cx, &scene)?;
+    let file = cx.file;
+    scene.warnings = cx
+        .warnings
+        .into_iter()
+        .map(|w| format!("{file}: {w}"))
+        .collect();
+    Ok(scene)
+}
+
+/// At most [`MAX_TRIANGLES`] triangles under the roots (the node tree is checked already, so
+/// each node is counted once).
+fn check_size(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
+    let mut count = 0usize;
+    let mut stack = scene.roots.clone();
+    while let Some(n) = stack.pop() {
+        let node = &scene.nodes[n];
+        if let Some(m) = node.mesh {
+            count += scene.meshes[m]
+                .iter()
+                .map(|p| p.indices.len() / 3)
+                .sum::<usize>();
+        }
+        if count > MAX_TRIANGLES {
+            return Err(cx.err(format!(
+                "the scene instances more than {MAX_TRIANGLES} triangles, irad's limit"
+            )));
+        }
+        stack.extend(&node.children);
+    }
+    Ok(())
+}
+
+/// A scene whose centre lies more than 100 times its size from the origin is moved to the
+/// origin: 32-bit coordinates there would be too coarse for its detail (rays would leak).
+fn recenter(cx: &mut Ctx, scene: &mut Scene, (lo, hi): (Vec3, Vec3)) {
+    let center = (lo + hi) * 0.5;
+    let size = (hi - lo).max_element().max(1e-6);
+    if center.abs().max_element() > 100.0 * size {
+        scene.shift = -center;
+        cx.warn(format!(
+            "the scene lies {:.3e} units from the origin, {:.0} times its size: it is moved to the origin (by {}) for precision",
+            center.length(),
+            center.length() / size,
+            -center
+        ));
+    }
+}
+
+/// At times spread over the animation: coordinates within [`MAX_COORD`], a usable camera,
+/// finite emitted power; and at one of them at least, an emitter.
+fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
+    let d = scene.duration();
+    let n = ((d * 10.0).ceil() as usize).min(CHECK_SAMPLES);
+    let mut lit = false;
+    for i in 0..=n {
+        let t = if n == 0 { 0.0 } else { d * i as f32 / n as f32 };
+        let f = scene.at(t);
+        if let Some(p) = f
+            .tris
+            .iter()
+            .flatten()
+            .find(|p| p.abs().max_element() > MAX_COORD)
+        {
+            return Err(cx.err(format!(
+                "at t = {t} s a vertex lies at {p}, beyond irad's coordinate limit of {MAX_COORD:e}"
+            )));
+        }
+        let camera = scene.file_camera(t);
+        if let Some(n) = scene
+            .camera_node
+            .filter(|_| !camera.is_some_and(|c| c.is_valid()))
+        {
+            return Err(cx.err(format!(
+                "at t = {t} s the camera's node {n} ('{}') has no usable view: its transform is scaled to zero or degenerate",
+                scene.nodes[n].name
+            )));
+        }
+        let power = crate::math::luminance(f.emitters.total_power);
+        if !(power.is_finite() && power < 1e30) {
+            return Err(cx.err(format!(
+                "at t = {t} s the emitters' total power is {}, too large for 32-bit floats",
+                f.emitters.total_power
+            )));
+        }
+        lit |= !f.emitters.tris.is_empty();
+    }
+    if !lit {
+        let punctual = match cx.punctual.as_str() {
+            "" => String::new(),
+            p => format!(" (its KHR_lights_punctual lights, {p}, are not rendered by irad yet)"),
+        };
+        return Err(cx.err(format!(
+            "no emitter: no triangle has a material with emissiveFactor > 0, so there is nothing to light the scene{punctual}"
+        )));
+    }
+    Ok(())
+}

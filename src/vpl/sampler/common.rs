@@ -1,0 +1,190 @@
+//! What the samplers share: fresh light paths, the frame's candidates with their floored
+//! importance, stratified CDF draws, the MH acceptance test, and the weighted selection.
+
+use super::Selection;
+use crate::scene::Frame;
+use crate::trace::Tracer;
+use crate::vpl::importance::{importance_all, CameraPoint};
+use crate::vpl::{trace_path, trace_paths, ShadedVpl, Vpl};
+use rand::Rng;
+use std::time::Instant;
+
+/// Path ids of frame f start at f * PATHS_PER_FRAME, so frames draw independent paths.
+pub const PATHS_PER_FRAME: u64 = 1 << 32;
+
+/// Identity of a VPL: (path id, depth). The path can be re-traced in any frame.
+pub type Key = (u64, u32);
+
+pub fn key(v: &Vpl) -> Key {
+    (v.path, v.depth)
+}
+
+/// The VPLs of paths `stream * 2^32 + k`, k = 0, 1, ... (`stream` is the frame index for
+/// fresh paths, a fixed number for paths that are the same every frame). Paths are added
+/// until there are `target` VPLs (`whole`: only whole paths that fit); returns the VPLs and
+/// the number of paths.
+pub fn fresh_paths(
+    frame: &Frame,
+    tracer: &Tracer,
+    seed: u64,
+    stream: u64,
+    target: usize,
+    whole: bool,
+) -> (Vec<Vpl>, u64) {
+    let mut vpls = Vec::with_capacity(target + 16);
+    let mut paths = 0u64;
+    // Batches of paths in parallel, kept in path order.
+    while vpls.len() < target && paths < 64 * target as u64 + 1024 {
+        let batch = ((target - vpls.len()) / 2).clamp(1, 4096) as u64;
+        let first = stream * PATHS_PER_FRAME + paths;
+        let traced: Vec<Vec<Vpl>> = {
+            use rayon::prelude::*;
+            (first..first + batch)
+                .into_par_iter()
+                .map(|p| trace_path(frame, tracer, seed, p))
+                .collect()
+        };
+        for p in traced {
+            if vpls.len() >= target || (whole && vpls.len() + p.len() > target) {
+                return (vpls, paths);
+            }
+            // A path that left no VPL (its light escaped) still counts as a path.
+            vpls.extend(p);
+            paths += 1;
+        }
+    }
+    (vpls, paths)
+}
+
+/// Stratified inverse-transform draws of `n` indices from weights `w`.
+pub fn cdf_draw(w: &[f32], n: usize, r: &mut impl Rng) -> Vec<usize> {
+    let mut cdf = Vec::with_capacity(w.len());
+    let mut acc = 0.0f64;
+    for &x in w {
+        acc += x as f64;
+        cdf.push(acc);
+    }
+    (0..n)
+        .map(|j| {
+            let u = (j as f64 + r.random::<f64>()) / n as f64 * acc;
+            cdf.partition_point(|&c| c <= u).min(w.len() - 1)
+        })
+        .collect()
+}
+
+/// One Metropolis-Hastings decision: accept a proposal of importance `proposed` from a state
+/// of importance `current` (a state of importance 0 always moves).
+pub fn mh_accept(current: f32, proposed: f32, u: f32) -> bool {
+    current <= 0.0 || u * current < proposed
+}
+
+/// Candidates of a frame with their floored importance.
+pub struct Candidates {
+    pub vpls: Vec<Vpl>,
+    pub importance: Vec<f32>,
+    pub paths: u64,
+    /// Seconds spent tracing the candidates' paths.
+    pub paths_s: f64,
+    /// eps * mean(I), added to every I.
+    pub floor: f32,
+    /// Mean floored importance.
+    pub b: f32,
+}
+
+impl Candidates {
+    /// The VPLs of fresh paths of `stream` until there are at least `m`, and their importance
+    /// plus the floor `eps * mean(I)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        frame: &Frame,
+        tracer: &Tracer,
+        points: &[CameraPoint],
+        seed: u64,
+        stream: u64,
+        m: usize,
+        eps: f32,
+        dmin: f32,
+    ) -> Self {
+        let t = Instant::now();
+        let (vpls, paths) = fresh_paths(frame, tracer, seed, stream, m, false);
+        let paths_s = t.elapsed().as_secs_f64();
+        Self::of(vpls, paths, paths_s, points, tracer, eps, dmin)
+    }
+
+    /// The VPLs of exactly paths `first..first + count`, with their floored importance.
+    #[allow(clippy::too_many_arguments)]
+    pub fn of_paths(
+        frame: &Frame,
+        tracer: &Tracer,
+        points: &[CameraPoint],
+        seed: u64,
+        first: u64,
+        count: u64,
+        eps: f32,
+        dmin: f32,
+    ) -> Self {
+        let t = Instant::now();
+        let vpls = trace_paths(frame, tracer, seed, first, count);
+        let paths_s = t.elapsed().as_secs_f64();
+        Self::of(vpls, count, paths_s, points, tracer, eps, dmin)
+    }
+
+    fn of(
+        vpls: Vec<Vpl>,
+        paths: u64,
+        paths_s: f64,
+        points: &[CameraPoint],
+        tracer: &Tracer,
+        eps: f32,
+        dmin: f32,
+    ) -> Self {
+        let raw = importance_all(&vpls, points, tracer, dmin);
+        let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
+        let floor = (eps as f64 * mean) as f32;
+        Candidates {
+            importance: raw.iter().map(|&x| x + floor).collect(),
+            vpls,
+            paths,
+            paths_s,
+            floor,
+            b: (mean * (1.0 + eps as f64)) as f32,
+        }
+    }
+
+    /// `b / N * (M / P)`: a chosen VPL's weight is this over its floored importance.
+    pub fn scale(&self, n: usize) -> f32 {
+        self.b / n as f32 * (self.vpls.len() as f32 / self.paths.max(1) as f32)
+    }
+}
+
+/// The selection of `chosen` VPLs with weights `scale / I`.
+pub fn weighted(
+    chosen: Vec<Vpl>,
+    importance: &[f32],
+    scale: f32,
+    paths: u64,
+    b: f32,
+    acceptance: Option<f32>,
+) -> Selection {
+    let shaded = chosen
+        .iter()
+        .zip(importance)
+        .map(|(v, &i)| ShadedVpl::new(v, scale / i))
+        .collect();
+    Selection {
+        vpls: chosen,
+        shaded,
+        paths,
+        acceptance,
+        b: Some(b),
+        ..Default::default()
+    }
+}
+
+/// Fraction of slots whose key differs between two frames (1 when the counts differ).
+pub fn replaced(before: &[Key], after: &[Key]) -> f32 {
+    if before.len() != after.len() || after.is_empty() {
+        return 1.0;
+    }
+    before.iter().zip(after).filter(|(a, b)| a != b).count() as f32 / after.len() as f32
+}
