@@ -326,7 +326,7 @@ impl Default for Quality {
             ism_bias: 1.5,
             light_samples: 32,
             shadow_size: 256,
-            interleave: 1,
+            interleave: 4,
         }
     }
 }
@@ -843,6 +843,23 @@ mod tests {
         Reference::default().validate().unwrap();
         Compare::default().validate().unwrap();
         Bench::default().validate().unwrap();
+    }
+
+    #[test]
+    fn interleave_out_of_range_names_the_flag() {
+        for bad in [0, 9] {
+            let q = Quality {
+                interleave: bad,
+                ..Quality::default()
+            };
+            let e = q.validate().unwrap_err().to_string();
+            assert!(e.contains("--interleave") && e.contains("1 to 8"), "{e}");
+        }
+        let q = Quality {
+            interleave: 8,
+            ..Quality::default()
+        };
+        q.validate().unwrap();
     }
 
     #[test]

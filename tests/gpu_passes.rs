@@ -238,7 +238,13 @@ fn same_plane(
 /// for odd n, (n+1) x (n+1) with half weights on the outer rows and columns for even n.
 fn window(x: u32, y: u32, n: u32) -> Vec<(usize, f32)> {
     let h = n as i32 / 2;
-    let w = |d: i32| if n.is_multiple_of(2) && d.abs() == h { 0.5 } else { 1.0 };
+    let w = |d: i32| {
+        if n.is_multiple_of(2) && d.abs() == h {
+            0.5
+        } else {
+            1.0
+        }
+    };
     let mut v = Vec::new();
     for dy in -h..=h {
         for dx in -h..=h {
