@@ -46,6 +46,10 @@ struct Params {
     near: f32,
     pull_levels: u32,
     num_changed: u32, // ISM slots redrawn this frame
+    interleave: u32, // interleaved gather block side (1: off)
+    shift_x: u32, // the interleave pattern's shift
+    shift_y: u32,
+    _pad: u32,
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

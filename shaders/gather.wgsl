@@ -1,5 +1,8 @@
 // Gather: every pixel sums the clamped contribution of every VPL, with ISM visibility
-// (a depth bias scaled by the tile's texel footprint).
+// (a depth bias scaled by the tile's texel footprint). Interleaved (P.interleave = n > 1):
+// the pixel at block position k = ((y + shift_y) mod n) * n + (x + shift_x) mod n sums only
+// the VPLs i with i mod n^2 = k, scaled by n^2, and writes that irradiance-like sum without
+// the albedo: the `interleave` pass filters it and applies the albedo.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -23,8 +26,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let x = gbuffer_x(g);
     let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
     let texel_angle = 4.0 / f32(P.ism_size);
+    let side = max(P.interleave, 1u);
+    let step = side * side;
+    let first = ((gid.y + P.shift_y) % side) * side + (gid.x + P.shift_x) % side;
     var sum = vec3f(0.0);
-    for (var i = 0u; i < P.num_vpls; i++) {
+    for (var i = first; i < P.num_vpls; i += step) {
         let v = vpls[i];
         let d = v.pos.xyz - x;
         let d2 = dot(d, d);
@@ -47,5 +53,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
         sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, P.dmin * P.dmin)));
     }
-    indirect[pix] = vec4f(sum * tri.albedo.xyz, 1.0);
+    if side > 1u {
+        indirect[pix] = vec4f(sum * f32(step), 1.0);
+    } else {
+        indirect[pix] = vec4f(sum * tri.albedo.xyz, 1.0);
+    }
 }

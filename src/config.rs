@@ -311,6 +311,10 @@ pub struct Quality {
     /// Shadow hemicube face side in texels
     #[arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true)]
     pub shadow_size: u32,
+    /// Interleaved gather: each pixel of an NxN block gathers every (N^2)-th VPL, then a
+    /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all)
+    #[arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true)]
+    pub interleave: u32,
 }
 
 impl Default for Quality {
@@ -322,6 +326,7 @@ impl Default for Quality {
             ism_bias: 1.5,
             light_samples: 32,
             shadow_size: 256,
+            interleave: 4,
         }
     }
 }
@@ -353,7 +358,8 @@ impl Quality {
         )?;
         check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
         check::int("--light-samples", self.light_samples, 1, 4096)?;
-        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)
+        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
+        check::int("--interleave", self.interleave, 1, 8)
     }
 }
 
@@ -483,6 +489,7 @@ impl Render {
             ism_bias: q.ism_bias,
             light_samples: q.light_samples,
             shadow_size: q.shadow_size,
+            interleave: q.interleave,
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,
@@ -863,6 +870,23 @@ mod tests {
         Reference::default().validate().unwrap();
         Compare::default().validate().unwrap();
         Bench::default().validate().unwrap();
+    }
+
+    #[test]
+    fn interleave_out_of_range_names_the_flag() {
+        for bad in [0, 9] {
+            let q = Quality {
+                interleave: bad,
+                ..Quality::default()
+            };
+            let e = q.validate().unwrap_err().to_string();
+            assert!(e.contains("--interleave") && e.contains("1 to 8"), "{e}");
+        }
+        let q = Quality {
+            interleave: 8,
+            ..Quality::default()
+        };
+        q.validate().unwrap();
     }
 
     #[test]

@@ -34,6 +34,8 @@ fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
     };
     c.vpls = vpls;
     c.quality.light_samples = light_samples;
+    // The CPU twin is the full gather: every pixel gathers every VPL.
+    c.quality.interleave = 1;
     c.sampler.camera_points = 64;
     c.sampler.mh_escape = 0;
     c

@@ -269,6 +269,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::ism::SPLAT,
         &super::ism::PULL_PUSH,
         &super::gather::PASS,
+        &super::interleave::PASS,
         &super::compose::PASS,
     ]
 }

@@ -24,6 +24,11 @@ gpu_struct! {
         pub pull_levels: u32,
         /// ISM slots redrawn this frame (the first entries of the slots buffer).
         pub num_changed: u32,
+        /// Interleaved gather block side (1: off) and the pattern's shift in x and y.
+        pub interleave: u32,
+        pub shift_x: u32,
+        pub shift_y: u32,
+        pub _pad: u32,
     }
 }
 

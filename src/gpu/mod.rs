@@ -1,5 +1,5 @@
 //! Stage 7: the GPU (wgpu, headless). One module per pass, each beside its WGSL twin in
-//! `shaders/`: `gbuffer`, `ism` (splat and pull-push), `gather`, `shadow` and `direct`,
+//! `shaders/`: `gbuffer`, `ism` (splat and pull-push), `gather` and `interleave` (its filter), `shadow` and `direct`,
 //! `compose` (emission, sum, exposure and sRGB). `renderer` runs them in order for a frame.
 
 pub(crate) mod bindings;
@@ -8,6 +8,7 @@ pub mod compose;
 pub mod direct;
 pub mod gather;
 pub mod gbuffer;
+pub mod interleave;
 pub mod ism;
 pub mod profile;
 pub mod radiosity;

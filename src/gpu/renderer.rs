@@ -1,5 +1,6 @@
 //! The GPU frame: uploads the frame's triangles, VPLs and emitter samples, runs the passes in
-//! order (G-buffer, shadow hemicubes, direct light, ISM splat, pull-push, gather, compose) and
+//! order (G-buffer, shadow hemicubes, direct light, ISM splat, pull-push, gather, interleave
+//! filter, compose) and
 //! reads the frame back, all in one submission (or, profiling without timestamp queries,
 //! one per pass: see `profile`).
 
@@ -8,8 +9,8 @@ use super::common::{LightSample, Params, Tri, Vpl};
 use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
 use super::{
-    check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer, ism,
-    shadow::ShadowMaps, Gpu,
+    check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer,
+    interleave::Interleave, ism, shadow::ShadowMaps, Gpu,
 };
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
@@ -41,6 +42,8 @@ pub struct RendererConfig {
     pub shadow_size: u32,
     /// Shadow depth bias, in texel footprints.
     pub shadow_bias: f32,
+    /// Interleaved gather block side (1: every pixel gathers every VPL; see `interleave`).
+    pub interleave: u32,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,
@@ -74,13 +77,14 @@ pub struct RenderedImage {
 }
 
 /// The passes of a frame, in order, as timings name them.
-pub const PASSES: [&str; 7] = [
+pub const PASSES: [&str; 8] = [
     "gbuffer",
     "shadow_maps",
     "direct",
     "ism_splat",
     "ism_pullpush",
     "gather",
+    "interleave",
     "compose",
 ];
 
@@ -149,6 +153,10 @@ pub struct Renderer {
     direct: Direct,
     ism: ism::Ism,
     gather: Gather,
+    /// The interleaved gather's filter (`interleave > 1`).
+    interleave: Option<Interleave>,
+    /// The interleave pattern's shift in x and y (from the seed; each below `interleave`).
+    pub interleave_shift: (u32, u32),
     compose: Compose,
 }
 
@@ -169,6 +177,9 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
             c.points_per_vpl,
             c.num_points
         );
+    }
+    if !(1..=8).contains(&c.interleave) {
+        bail!("--interleave {} is out of range (1 to 8)", c.interleave);
     }
     let pyramid = ism::atlas_bytes(c.max_vpls, c.ism_size) * 4 / 3 + 64;
     check_size(
@@ -285,14 +296,22 @@ impl Renderer {
             &gbuffer.view,
             pixels,
         );
+        let interleave = (c.interleave > 1)
+            .then(|| Interleave::new(&gpu, &params, &tris, &gbuffer.view, &gather.output, pixels));
+        let indirect = interleave.as_ref().map_or(&gather.output, |f| &f.output);
         let compose = Compose::new(
             &gpu,
             &params,
             &tris,
             &gbuffer.view,
             &direct.output,
-            &gather.output,
+            indirect,
             pixels,
+        );
+        let h = crate::math::mix64(c.seed ^ 0x1e7e_a5ed_0000_0009);
+        let interleave_shift = (
+            (h % c.interleave as u64) as u32,
+            ((h >> 32) % c.interleave as u64) as u32,
         );
         let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
         let staging = Staging {
@@ -324,6 +343,8 @@ impl Renderer {
             direct,
             ism,
             gather,
+            interleave,
+            interleave_shift,
             compose,
         })
     }
@@ -470,6 +491,10 @@ impl Renderer {
             near,
             pull_levels: c.pull_levels,
             num_changed: changed.len() as u32,
+            interleave: c.interleave,
+            shift_x: self.interleave_shift.0 % c.interleave,
+            shift_y: self.interleave_shift.1 % c.interleave,
+            _pad: 0,
         };
         self.gpu
             .queue
@@ -534,6 +559,11 @@ impl Renderer {
         // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light.
         self.gather.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
+        // interleave: G-buffer, triangles, subset sums -> filtered indirect light (N > 1).
+        if let Some(f) = &self.interleave {
+            f.encode(&mut rec.enc, c.width, c.height);
+        }
+        rec.end_pass()?;
         // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview.
         self.compose.encode(&mut rec.enc, c.width, c.height);
         rec.end_pass()?;
@@ -558,7 +588,11 @@ impl Renderer {
         reads.push((&self.compose.ldr, &st.ldr, ldr_bytes));
         if components {
             reads.push((&self.direct.output, &st.direct, hdr_bytes));
-            reads.push((&self.gather.output, &st.indirect, hdr_bytes));
+            let indirect = self
+                .interleave
+                .as_ref()
+                .map_or(&self.gather.output, |f| &f.output);
+            reads.push((indirect, &st.indirect, hdr_bytes));
         }
         for &(src, dst, size) in &reads {
             rec.enc.copy_buffer_to_buffer(src, 0, dst, 0, size);

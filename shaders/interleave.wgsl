@@ -1,0 +1,66 @@
+// Interleave filter: recombines the interleaved gather's subsets. Each pixel averages the
+// n^2-scaled subset sums of the pixels of the window centred on it that lie on its own
+// surface (normals within ~25 degrees, and within 1% of the camera distance of its tangent
+// plane), then applies its albedo. The window is n x n for odd n; for even n it is
+// (n+1) x (n+1) with half weights on its outer rows and columns (their pixels carry the same
+// subsets), so that it stays centred. On a flat region it holds every subset with total
+// weight one; any
+// accepted neighbour's value alone is an unbiased estimate of the full gather over the
+// pattern's random shift, so their mean is too.
+
+@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(1) var<storage, read> tris: array<Tri>;
+@group(0) @binding(2) var gbuf: texture_2d<u32>;
+@group(0) @binding(3) var<storage, read> subsets: array<vec4f>;
+@group(0) @binding(4) var<storage, read_write> indirect: array<vec4f>;
+
+// Smallest cosine between the normals of pixels filtered together.
+const NORMAL_COS: f32 = 0.9;
+// Largest distance of a neighbour from the pixel's tangent plane, relative to its distance
+// from the camera.
+const PLANE_REL: f32 = 0.01;
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3u) {
+    if gid.x >= P.width || gid.y >= P.height {
+        return;
+    }
+    let pix = gid.y * P.width + gid.x;
+    let g = textureLoad(gbuf, vec2i(gid.xy), 0);
+    if g.w == 0u {
+        indirect[pix] = vec4f(0.0);
+        return;
+    }
+    let tri = tris[g.w - 1u];
+    let x = gbuffer_x(g);
+    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
+    let tol = PLANE_REL * distance(x, P.cam_pos.xyz);
+    let side = i32(max(P.interleave, 1u));
+    let even = side % 2 == 0;
+    let h = side / 2;
+    var sum = vec3f(0.0);
+    var count = 0.0;
+    for (var dy = -h; dy <= h; dy++) {
+        for (var dx = -h; dx <= h; dx++) {
+            let q = vec2i(gid.xy) + vec2i(dx, dy);
+            if q.x < 0 || q.y < 0 || q.x >= i32(P.width) || q.y >= i32(P.height) {
+                continue;
+            }
+            let gq = textureLoad(gbuf, q, 0);
+            if gq.w == 0u {
+                continue;
+            }
+            let xq = gbuffer_x(gq);
+            let nq = facing(tris[gq.w - 1u].n.xyz, xq, P.cam_pos.xyz);
+            if dot(nq, n) < NORMAL_COS || abs(dot(xq - x, n)) > tol {
+                continue;
+            }
+            let wx = select(1.0, 0.5, even && abs(dx) == h);
+            let wy = select(1.0, 0.5, even && abs(dy) == h);
+            sum += wx * wy * subsets[u32(q.y) * P.width + u32(q.x)].xyz;
+            count += wx * wy;
+        }
+    }
+    // The pixel itself always passes (weight 1): count >= 1.
+    indirect[pix] = vec4f(sum / count * tri.albedo.xyz, 1.0);
+}
