@@ -165,7 +165,8 @@ impl Classical {
         if solved {
             let shaded =
                 radiosity::display::Shaded::new(frame, solution, radiosity::Part::Indirect);
-            self.pass.upload(&self.gpu, &shaded);
+            // Emission comes from the compose pass, as for instant radiosity.
+            self.pass.upload_with(&self.gpu, &shaded, false);
         }
         lap(stages, "radiosity_solve", &mut t);
         let indirect = self.pass.render(&self.gpu, frame)?;

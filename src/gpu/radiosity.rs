@@ -225,12 +225,23 @@ impl RadiosityPass {
         }
     }
 
-    /// Uploads a shaded solution (done once per solve; the camera may move freely after).
+    /// Uploads a shaded solution (done once per solve; the camera may move freely after),
+    /// emission included.
     pub fn upload(&mut self, gpu: &Gpu, shaded: &Shaded) {
+        self.upload_with(gpu, shaded, true);
+    }
+
+    /// Uploads a shaded solution, with or without the elements' emission (without: when
+    /// another pass, such as `compose`, adds the emission).
+    pub fn upload_with(&mut self, gpu: &Gpu, shaded: &Shaded, emission: bool) {
         let f = &shaded.elements;
         let verts: Vec<Vertex> = (0..f.tris.len())
             .flat_map(|e| {
-                let le = f.emission(e);
+                let le = if emission {
+                    f.emission(e)
+                } else {
+                    glam::Vec3::ZERO
+                };
                 let n = f.normals[e].to_array();
                 (0..3).map(move |k| (e, k, le, n))
             })
