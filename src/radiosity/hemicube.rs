@@ -354,7 +354,10 @@ mod tests {
     /// The adapter `BackendChoice::Auto` gives, or `None` (with a message) where there is none.
     fn gpu() -> Option<Gpu> {
         match Gpu::new(BackendChoice::Auto) {
-            Ok(g) => Some(g),
+            Ok(g) => {
+                println!("hemicube on {}", g.adapter);
+                Some(g)
+            }
             Err(e) => {
                 println!("no GPU adapter, hemicube test skipped: {e}");
                 None
