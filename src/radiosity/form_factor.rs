@@ -166,7 +166,7 @@ pub fn between(
 
 #[cfg(test)]
 #[allow(clippy::needless_range_loop)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::scene::builtin;
 
@@ -175,7 +175,7 @@ mod tests {
     /// appendix C): with X = a/c, Y = b/c,
     /// F = 2/(pi X Y) [ ln sqrt((1+X^2)(1+Y^2)/(1+X^2+Y^2)) + X sqrt(1+Y^2) atan(X/sqrt(1+Y^2))
     ///   + Y sqrt(1+X^2) atan(Y/sqrt(1+X^2)) - X atan X - Y atan Y ].
-    fn parallel_squares(a: f32, c: f32) -> f32 {
+    pub(crate) fn parallel_squares(a: f32, c: f32) -> f32 {
         let (x, y) = ((a / c) as f64, (a / c) as f64);
         let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
         let f = 2.0 / (std::f64::consts::PI * x * y)

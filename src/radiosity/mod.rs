@@ -1,12 +1,14 @@
 //! Classical radiosity, the finite-element methods instant radiosity grew from: the frame
-//! meshed into elements ([`mesh`]), form factors ([`form_factor`]), three solvers
-//! ([`progressive`] shooting, [`hierarchical`] links, [`stochastic`] Jacobi) and the display of
-//! a solution ([`display`]: Gouraud values at vertices). Everything is in radiance units
+//! meshed into elements ([`mesh`]), form factors ([`form_factor`] by rays, [`hemicube`] on
+//! the GPU as the measured alternative), three solvers ([`progressive`] shooting,
+//! [`hierarchical`] links, [`stochastic`] Jacobi) and the display of a solution ([`display`]:
+//! Gouraud values at vertices). Everything is in radiance units
 //! (`B / pi`): element `i` solves `L_i = Le_i + rho_i * sum_j F_ij L_j`.
 //! See docs/radiosity.md.
 
 pub mod display;
 pub mod form_factor;
+pub mod hemicube;
 pub mod hierarchical;
 pub mod mesh;
 pub mod progressive;
