@@ -255,6 +255,38 @@ fn a_classical_method_renders_the_same_outputs_and_solves_only_when_the_scene_mo
         let img = irad::image::Hdr::read(&out.join("frame_0001.exr")).unwrap();
         let m = img.mean();
         assert!(m.is_finite() && m.x > 0.05, "{scene}: mean {m}");
+        // The light's pixels carry its emission once, as instant radiosity's do (the display
+        // pass once added the emission that compose adds too: 2x).
+        let brightest = |img: &irad::image::Hdr| {
+            img.data
+                .iter()
+                .map(|&c| irad::math::luminance(c))
+                .fold(0.0f32, f32::max)
+        };
+        let instant = out.join("instant");
+        let r = irad(&[
+            "render",
+            scene,
+            "--size",
+            "24x24",
+            "--frames",
+            "1",
+            "--light-samples",
+            "4",
+            "--vpls",
+            "16",
+            "--out",
+            instant.to_str().unwrap(),
+        ]);
+        assert!(r.status.success());
+        let inst = irad::image::Hdr::read(&instant.join("frame_0001.exr")).unwrap();
+        let (a, b) = (brightest(&img), brightest(&inst));
+        // Measured: 0.1% apart on cornell-orbit, 2.6% on cornell-light (the light's own
+        // reflected light, from 16 VPLs in the instant frame); twice the emission is 100%.
+        assert!(
+            (a / b - 1.0).abs() < 0.04,
+            "{scene}: brightest {a} vs instant {b}"
+        );
         std::fs::remove_dir_all(&out).unwrap();
     }
 }
