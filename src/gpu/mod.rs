@@ -315,13 +315,32 @@ impl Gpu {
     }
 
     /// A render pipeline over the scene's vertex buffer (position, triangle index), writing
-    /// one float colour target and depth.
+    /// one colour target and depth.
     pub(crate) fn raster_pipeline(
         &self,
         label: &str,
         module: &wgpu::ShaderModule,
         layout: &wgpu::BindGroupLayout,
         target: wgpu::TextureFormat,
+    ) -> wgpu::RenderPipeline {
+        let attributes = gbuffer::Vertex::ATTRIBUTES;
+        let vertices = wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<gbuffer::Vertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        };
+        self.raster_pipeline_over(label, module, layout, target, vertices)
+    }
+
+    /// A render pipeline (entry points `vs` and `fs`, no culling, depth test `Less` on a
+    /// Depth32Float target) over vertices laid out as `vertices`, writing one colour target.
+    pub(crate) fn raster_pipeline_over(
+        &self,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        layout: &wgpu::BindGroupLayout,
+        target: wgpu::TextureFormat,
+        vertices: wgpu::VertexBufferLayout,
     ) -> wgpu::RenderPipeline {
         let pl = self
             .device
@@ -330,7 +349,6 @@ impl Gpu {
                 bind_group_layouts: &[Some(layout)],
                 immediate_size: 0,
             });
-        let attributes = gbuffer::Vertex::ATTRIBUTES;
         self.device
             .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -339,11 +357,7 @@ impl Gpu {
                     module,
                     entry_point: Some("vs"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<gbuffer::Vertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &attributes,
-                    })],
+                    buffers: &[Some(vertices)],
                 },
                 primitive: wgpu::PrimitiveState {
                     cull_mode: None,
