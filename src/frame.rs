@@ -58,7 +58,6 @@ impl Pipeline {
         let params = cfg.sampler_params(&scene);
         let sampler = Sampler::new(params.clone());
         let classical = (cfg.method != Method::Instant).then(|| Classical {
-            gpu: renderer.gpu.clone(),
             settings: cfg.radiosity_settings(&scene),
             cache: radiosity::Cache::default(),
             pass: RadiosityPass::new(
@@ -66,7 +65,6 @@ impl Pipeline {
                 cfg.sequence.size.width,
                 cfg.sequence.size.height,
             ),
-            exposure: cfg.exposure,
         });
         Ok(Pipeline {
             classical,
@@ -120,8 +118,14 @@ impl Pipeline {
         stages.extend(image.timings.iter().map(|&(n, t)| (n, t)));
         let (image, solved) = match &mut self.classical {
             Some(c) => {
-                let (image, solved) =
-                    c.add_indirect(image, &frame, &self.tracer, components, &mut stages)?;
+                let (image, solved) = c.add_indirect(
+                    image,
+                    &frame,
+                    &self.tracer,
+                    &self.renderer,
+                    components,
+                    &mut stages,
+                )?;
                 (image, Some(solved))
             }
             None => (image, None),
@@ -142,11 +146,9 @@ impl Pipeline {
 /// emitters are still, gives the indirect light; the GPU's passes give emission and direct
 /// light as for instant radiosity (with no VPLs).
 struct Classical {
-    gpu: Arc<Gpu>,
     settings: radiosity::Settings,
     cache: radiosity::Cache,
     pass: RadiosityPass,
-    exposure: f32,
 }
 
 impl Classical {
@@ -157,6 +159,7 @@ impl Classical {
         mut image: RenderedImage,
         frame: &crate::scene::Frame,
         tracer: &Tracer,
+        renderer: &Renderer,
         components: bool,
         stages: &mut Vec<(&'static str, f64)>,
     ) -> Result<(RenderedImage, bool)> {
@@ -166,14 +169,14 @@ impl Classical {
             let shaded =
                 radiosity::display::Shaded::new(frame, solution, radiosity::Part::Indirect);
             // Emission comes from the compose pass, as for instant radiosity.
-            self.pass.upload_with(&self.gpu, &shaded, false);
+            self.pass.upload_with(&renderer.gpu, &shaded, false);
         }
         lap(stages, "radiosity_solve", &mut t);
-        let indirect = self.pass.render(&self.gpu, frame)?;
+        let indirect = self.pass.render(&renderer.gpu, frame)?;
         for (o, i) in image.hdr.data.iter_mut().zip(&indirect.data) {
             *o += *i;
         }
-        image.ldr = image.hdr.to_srgb8(self.exposure);
+        image.ldr = image.hdr.to_srgb8(renderer.config.exposure);
         if components {
             image.indirect = Some(indirect);
         }
