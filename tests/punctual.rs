@@ -633,3 +633,70 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
         e.rel_bias
     );
 }
+
+/// More lights than direct-light samples: the samples are a stratified draw by power whose
+/// weights keep the expected irradiance exact, down to one sample (half a point light).
+#[test]
+fn too_many_lights_for_the_samples_are_drawn_without_bias() {
+    let mut g = Gltf::default();
+    let floor = g.floor(5.0);
+    let lights: Vec<Value> = (0..12)
+        .map(|i| json!({ "type": "point", "intensity": 683.0 * (1.0 + i as f32) }))
+        .collect();
+    let nodes: Vec<Value> = (0..12)
+        .map(|i| {
+            let a = i as f32 * 0.5;
+            json!({ "translation": [3.0 * a.cos(), 1.0 + 0.2 * i as f32, 3.0 * a.sin()], "extensions": { "KHR_lights_punctual": { "light": i } } })
+        })
+        .collect();
+    let scene = load(&g.finish(doc(vec![floor], json!(lights), nodes))).unwrap();
+    let f = scene.at(0.0);
+    let x = Vec3::new(0.5, 0.0, -0.3);
+    let exact: Vec3 = f
+        .emitters
+        .lights
+        .iter()
+        .filter_map(|l| l.irradiance_at(x, Vec3::Y, 1.0))
+        .map(|(e, _)| e)
+        .sum();
+    for count in [8, 1] {
+        let draws: Vec<Vec3> = (0..4000u64)
+            .map(|seed| {
+                let s = f.emitter_samples(seed, count);
+                assert!(s.len() <= count, "{} samples for {count}", s.len());
+                s.iter()
+                    .filter_map(|l| l.irradiance_at(x, Vec3::Y))
+                    .map(|(e, _, _)| e)
+                    .sum()
+            })
+            .collect();
+        let (m, se) = mean_se(&draws);
+        println!("{count} samples: {m} +- {se} against {exact}");
+        assert!(
+            ((m - exact).abs() - 4.0 * se).max_element() <= 0.0,
+            "{count} samples: {m} +- {se} against {exact}"
+        );
+    }
+    // Enough samples: every light exactly, a point light as two halves.
+    let all = f.emitter_samples(0, 24);
+    assert_eq!(all.len(), 24);
+    let sum: Vec3 = all
+        .iter()
+        .filter_map(|l| l.irradiance_at(x, Vec3::Y))
+        .map(|(e, _, _)| e)
+        .sum();
+    assert!(close(sum, exact, 1e-5));
+}
+
+#[test]
+fn irad_scenes_lists_the_lights() {
+    let s = lit_room();
+    let text = irad::scene::inspect::inspect(&s).to_string();
+    for line in [
+        "light       '': point at (-1.2000, 2.2000, 1.0000), intensity (30.0000, 27.0000, 24.0000) W/sr, power (376.9911, 339.2920, 301.5929) W",
+        "light       '': spot (cone 20.1 to 34.4 deg) at (1.4000, 2.8000, 0.6000) toward (0.0000, -1.0000, 0.0000)",
+        "light       '': directional toward (0.5000, -0.8660, 0.0000), intensity (4.0000, 4.5000, 5.0000) W/m^2",
+    ] {
+        assert!(text.contains(line), "'{line}' missing from:\n{text}");
+    }
+}

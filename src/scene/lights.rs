@@ -95,6 +95,8 @@ pub struct LightDef {
 /// A punctual light placed in a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PunctualLight {
+    /// Which of the scene's lights ([`crate::scene::Scene::lights`]).
+    pub light: usize,
     pub kind: LightKind,
     /// Where it is (a directional light's is unused).
     pub position: Vec3,

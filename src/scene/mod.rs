@@ -379,7 +379,10 @@ impl Scene {
         let mut stack: Vec<usize> = self.roots.iter().rev().copied().collect();
         while let Some(n) = stack.pop() {
             stack.extend(self.nodes[n].children.iter().rev());
-            let Some(def) = self.nodes[n].light.and_then(|l| self.lights.get(l)) else {
+            let Some((light, def)) = self.nodes[n]
+                .light
+                .and_then(|l| Some((l, self.lights.get(l)?)))
+            else {
                 continue;
             };
             let m = world[n];
@@ -396,6 +399,7 @@ impl Scene {
                 continue;
             }
             em.lights.push(PunctualLight {
+                light,
                 kind: def.kind,
                 position,
                 direction,
