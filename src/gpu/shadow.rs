@@ -132,9 +132,10 @@ impl ShadowMaps {
         let mut bytes = vec![0u8; (self.stride as usize) * samples.len() * 5];
         let mut layers = Vec::new();
         for (j, s) in samples.iter().enumerate() {
+            // A punctual light may lie far outside the geometry: its maps reach past it.
             let (near, far, ortho) = match s.kind {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
-                _ => (near, far, 0.0),
+                _ => (near, far.max(s.reach * 1.01), 0.0),
             };
             for (k, (r, u, f)) in face_bases(s.normal).into_iter().take(s.faces()).enumerate() {
                 let face = Face {

@@ -482,6 +482,10 @@ pub struct EmitterSample {
     pub normal: Vec3,
     pub radiance: Vec3,
     pub kind: SampleKind,
+    /// For a punctual light, the farthest the geometry can be from it (its distance to the
+    /// sphere around the geometry, far side), so that its shadow maps reach that far; 0 for
+    /// points on emitter triangles (which lie within the geometry).
+    pub reach: f32,
 }
 
 /// What an [`EmitterSample`] stands for, and so how its light reaches a point.
@@ -579,6 +583,7 @@ impl Frame {
                 normal: self.normals[tri],
                 radiance: self.emission(tri) * (self.areas[tri] / (p_e * count as f32)),
                 kind: SampleKind::Area,
+                reach: 0.0,
             }
         }));
         out
@@ -626,6 +631,8 @@ impl Frame {
         half: Option<bool>,
     ) {
         let radiance = l.intensity * weight;
+        let (c, r) = self.emitters.sphere;
+        let reach = (l.position - c).length() + r;
         match l.kind {
             LightKind::Point => {
                 let axis = if l.direction == Vec3::ZERO {
@@ -645,6 +652,7 @@ impl Frame {
                         normal: axis * s,
                         radiance: radiance * scale,
                         kind: SampleKind::PointHalf,
+                        reach,
                     });
                 }
             }
@@ -659,15 +667,16 @@ impl Frame {
                     cos_inner,
                     cos_outer,
                 },
+                reach,
             }),
             LightKind::Directional => {
-                let (c, r) = self.emitters.sphere;
                 let extent = r * 1.01;
                 out.push(EmitterSample {
                     position: c - l.direction * extent,
                     normal: l.direction,
                     radiance,
                     kind: SampleKind::Directional { extent },
+                    reach: 2.0 * extent,
                 });
             }
         }
