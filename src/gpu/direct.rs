@@ -13,11 +13,12 @@ pub const KIND_AREA: f32 = 0.0;
 pub const KIND_POINT_HALF: f32 = 1.0;
 pub const KIND_SPOT: f32 = 2.0;
 pub const KIND_DIRECTIONAL: f32 = 3.0;
+pub const KIND_POINT_CONE: f32 = 4.0;
 
 impl From<&EmitterSample> for LightSample {
     /// Position, normal and radiance, with the kind in `pos.w` and its parameters in
     /// `normal.w` and `radiance.w` (a spot's inner and outer cosines, a directional
-    /// light's map half-extent).
+    /// light's map half-extent, a far point light's frustum half-width).
     fn from(l: &EmitterSample) -> Self {
         let (kind, a, b) = match l.kind {
             SampleKind::Area => (KIND_AREA, 0.0, 0.0),
@@ -27,6 +28,7 @@ impl From<&EmitterSample> for LightSample {
                 cos_outer,
             } => (KIND_SPOT, cos_inner, cos_outer),
             SampleKind::Directional { extent } => (KIND_DIRECTIONAL, extent, 0.0),
+            SampleKind::PointCone { tan_half } => (KIND_POINT_CONE, tan_half, 0.0),
         };
         LightSample {
             pos: l.position.extend(kind).to_array(),

@@ -1,7 +1,8 @@
 //! Shadow hemicubes (`shaders/shadow.wgsl`): for every emitter sample, five 90-degree faces
 //! (+n, +t, -t, +b, -b) rasterized from the triangles, storing distance to the sample. These
 //! are the accurate shadow maps of the direct light. A point light is two samples (two
-//! hemicubes, back to back); a spot light is one, drawing only its front face when its cone
+//! hemicubes, back to back), or, when it lies well outside the geometry, one face zoomed to
+//! the frustum that holds the geometry; a spot light is one, drawing only its front face when its cone
 //! fits it (within 45 degrees); a directional light draws one orthographic map along its
 //! direction over the square that covers the geometry, storing depth along the direction.
 
@@ -138,7 +139,13 @@ impl ShadowMaps {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
+            // A far point light's one face is zoomed to its frustum by shortening the axes.
+            let zoom = match s.kind {
+                SampleKind::PointCone { tan_half } => 1.0 / tan_half,
+                _ => 1.0,
+            };
             for (k, (r, u, f)) in face_bases(s.normal).into_iter().take(s.faces()).enumerate() {
+                let (r, u) = (r * zoom, u * zoom);
                 let face = Face {
                     pos: s.position.extend(1.0).to_array(),
                     right: r.extend(0.0).to_array(),

@@ -500,6 +500,10 @@ pub enum SampleKind {
     /// A spot light: intensity `radiance` (W/sr) along the axis `normal`, with glTF's cone
     /// falloff between the two cosines.
     Spot { cos_inner: f32, cos_outer: f32 },
+    /// A point light outside the geometry: its intensity `radiance` (W/sr) toward the
+    /// geometry, which lies within the square frustum about `normal` whose half-width is
+    /// `tan_half` (< 1) at unit distance: one shadow face, zoomed to that frustum.
+    PointCone { tan_half: f32 },
     /// A directional light: irradiance `radiance` (W/m^2) travelling along `normal`.
     /// `position` is the centre of a square `2 extent` wide facing it behind the geometry
     /// (its shadow map's).
@@ -529,7 +533,7 @@ impl EmitterSample {
         }
         let (f, nl) = match self.kind {
             SampleKind::Area => (cos_l, self.normal),
-            SampleKind::PointHalf => (1.0, Vec3::ZERO),
+            SampleKind::PointHalf | SampleKind::PointCone { .. } => (1.0, Vec3::ZERO),
             SampleKind::Spot {
                 cos_inner,
                 cos_outer,
@@ -550,7 +554,7 @@ impl EmitterSample {
     /// for a directional light and for a spot whose cone fits the front face, else five.
     pub fn faces(&self) -> usize {
         match self.kind {
-            SampleKind::Directional { .. } => 1,
+            SampleKind::Directional { .. } | SampleKind::PointCone { .. } => 1,
             // The front face holds every direction within 45 degrees of the axis.
             SampleKind::Spot { cos_outer, .. } if cos_outer >= std::f32::consts::FRAC_1_SQRT_2 => 1,
             _ => 5,
@@ -560,7 +564,7 @@ impl EmitterSample {
 
 impl Frame {
     /// `count` emitter samples: the punctual lights first (each exactly, a point light as two
-    /// samples, while they fit in `count` and leave one sample for the emitter triangles if
+    /// samples, or one when it lies well outside the geometry, while they fit in `count` and leave one sample for the emitter triangles if
     /// there are any; else a stratified draw by power, weighted by its probability), then
     /// samples of the emitter triangles, stratified over the power CDF. The streams depend on
     /// the seed only (so a still scene's direct light does not change from frame to frame).
@@ -596,7 +600,13 @@ impl Frame {
         if em.lights.is_empty() || count == 0 {
             return Vec::new();
         }
-        let slots = |l: &PunctualLight| if l.kind == LightKind::Point { 2 } else { 1 };
+        let slots = |l: &PunctualLight| {
+            if l.kind == LightKind::Point && self.cone_of(l).is_none() {
+                2
+            } else {
+                1
+            }
+        };
         let needed: usize = em.lights.iter().map(slots).sum();
         let has_area = !em.tris.is_empty();
         let mut out = Vec::new();
@@ -621,6 +631,19 @@ impl Frame {
         out
     }
 
+    /// For a point light outside the sphere around the geometry, far enough that the sphere
+    /// fits a square frustum narrower than 90 degrees: the frustum's axis (toward the centre)
+    /// and half-width at unit distance (1% wider than the sphere's cone).
+    fn cone_of(&self, l: &PunctualLight) -> Option<(Vec3, f32)> {
+        let (c, r) = self.emitters.sphere;
+        let d = (c - l.position).length();
+        let sin = r / d;
+        (d.is_finite() && sin < 0.69).then(|| {
+            let tan = sin / (1.0 - sin * sin).sqrt();
+            ((c - l.position) / d, tan * 1.01)
+        })
+    }
+
     /// The sample(s) of one punctual light, scaled by `weight`; `half`: only one half of a
     /// point light (which, doubled).
     fn push_light(
@@ -634,6 +657,16 @@ impl Frame {
         let (c, r) = self.emitters.sphere;
         let reach = (l.position - c).length() + r;
         match l.kind {
+            LightKind::Point if half.is_none() && self.cone_of(l).is_some() => {
+                let (axis, tan_half) = self.cone_of(l).unwrap();
+                out.push(EmitterSample {
+                    position: l.position,
+                    normal: axis,
+                    radiance,
+                    kind: SampleKind::PointCone { tan_half },
+                    reach,
+                });
+            }
             LightKind::Point => {
                 let axis = if l.direction == Vec3::ZERO {
                     Vec3::Y

@@ -306,6 +306,15 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
                 "at t = {t} s a vertex lies at {p}, beyond irad's coordinate limit of {MAX_COORD:e}"
             )));
         }
+        if let Some(l) = f.emitters.lights.iter().find(|l| {
+            l.kind != crate::scene::LightKind::Directional
+                && l.position.abs().max_element() > MAX_COORD
+        }) {
+            return Err(cx.err(format!(
+                "at t = {t} s KHR_lights_punctual light {} ('{}') lies at {}, beyond irad's coordinate limit of {MAX_COORD:e}",
+                l.light, scene.lights[l.light].name, l.position
+            )));
+        }
         let camera = scene.file_camera(t);
         if let Some(n) = scene
             .camera_node
