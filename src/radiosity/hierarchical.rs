@@ -8,16 +8,19 @@
 //! The solve is Jacobi on the links: gather along links at every level, push gathered
 //! radiance down to the leaves, pull leaf radiance back up as area averages. Links are built
 //! twice: once with the emission (and a rough ambient) as the oracle's radiance, then again
-//! with the first solution's radiance (BF refinement).
+//! with the first solution's radiance (BF refinement). The punctual lights' direct light is a
+//! source term of every leaf beside its emission (computed at each node once links are built,
+//! as in [`super::punctual_irradiance`]); light it sends along links is indirect.
 
 use super::form_factor::{self, point_to_polygon, Quality};
 use super::mesh::Mesh;
-use super::{ambient, Settings, Solution, Stats};
+use super::{ambient, punctual_irradiance, Settings, Solution, Stats};
 use crate::math::luminance;
 use crate::scene::Frame;
 use crate::trace::Tracer;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::f32::consts::PI;
 
 #[derive(Clone, Debug)]
 pub struct Params {
@@ -53,6 +56,10 @@ struct Node {
     source: u32,
     le: Vec3,
     rho: Vec3,
+    /// The punctual lights' direct light on the node (radiance), once `lp_done`; a new
+    /// child holds its parent's until then.
+    lp: Vec3,
+    lp_done: bool,
     children: Option<u32>,
     radiance: Vec3,
 }
@@ -91,9 +98,41 @@ impl Tree {
             source,
             le,
             rho,
+            lp: Vec3::ZERO,
+            lp_done: false,
             children: None,
             radiance: le,
         }
+    }
+
+    /// Computes the punctual lights' direct light on the nodes that do not have it yet
+    /// (nothing without punctual lights). Returns the rays cast.
+    fn punctual(&mut self, frame: &Frame, tracer: &Tracer) -> u64 {
+        if frame.emitters.lights.is_empty() {
+            return 0;
+        }
+        let todo: Vec<usize> = (0..self.nodes.len())
+            .filter(|&i| !self.nodes[i].lp_done)
+            .collect();
+        let nodes = &self.nodes;
+        let got: Vec<(Vec3, u32)> = todo
+            .par_iter()
+            .map(|&i| {
+                let nd = &nodes[i];
+                if nd.rho.max_element() <= 0.0 {
+                    return (Vec3::ZERO, 0);
+                }
+                let (e, rays) = punctual_irradiance(frame, tracer, &nd.c, nd.n);
+                (nd.rho / PI * e, rays)
+            })
+            .collect();
+        let mut rays = 0;
+        for (&i, (lp, r)) in todo.iter().zip(got) {
+            self.nodes[i].lp = lp;
+            self.nodes[i].lp_done = true;
+            rays += r as u64;
+        }
+        rays
     }
 
     /// Splits node `i` into four at its edge midpoints (once).
@@ -108,6 +147,7 @@ impl Tree {
         for t in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
             let mut child = Tree::node(t, p.n, p.source, p.le, p.rho);
             child.radiance = p.radiance;
+            child.lp = p.lp;
             self.nodes.push(child);
         }
         self.nodes[i].children = Some(first);
@@ -182,13 +222,14 @@ impl Tree {
     }
 
     /// Pushes gathered radiance down from node `i` (plus `down` from its ancestors) and
-    /// pulls the area-averaged radiance up. Returns the node's new radiance.
+    /// pulls the area-averaged radiance up. Returns the node's new radiance. Leaves add their
+    /// punctual direct light, and their emission with `emit`.
     fn push_pull(&mut self, i: usize, down: Vec3, gathered: &[Vec3], emit: bool) -> Vec3 {
         let g = down + gathered[i];
         let l = match self.nodes[i].children {
             None => {
                 let nd = &self.nodes[i];
-                let e = if emit { nd.le } else { Vec3::ZERO };
+                let e = if emit { nd.le + nd.lp } else { nd.lp };
                 e + nd.rho * g
             }
             Some(c) => {
@@ -246,23 +287,29 @@ pub fn solve(frame: &Frame, tracer: &Tracer, p: &Params) -> Solution {
         ));
     }
     let roots = tree.nodes.len();
+    let mut stats = Stats {
+        method: "hierarchical".into(),
+        ..Default::default()
+    };
+    stats.rays += tree.punctual(frame, tracer);
     let total_area: f32 = tree.nodes.iter().map(|n| n.area).sum();
-    let emitted: f32 = tree.nodes.iter().map(|n| n.area * luminance(n.le)).sum();
+    // The sources: emission and the punctual lights' direct light.
+    let emitted: f32 = tree
+        .nodes
+        .iter()
+        .map(|n| n.area * luminance(n.le + n.lp))
+        .sum();
     let mean_le = if total_area > 0.0 {
         emitted / total_area
     } else {
         0.0
-    };
-    let mut stats = Stats {
-        method: "hierarchical".into(),
-        ..Default::default()
     };
     let mut links: Vec<Link> = Vec::new();
     if emitted > 0.0 {
         // A rough ambient level for the first oracle: what bounces after the first.
         let amb = 0.5 * mean_le;
         for nd in tree.nodes.iter_mut() {
-            nd.radiance = nd.le + nd.rho * amb;
+            nd.radiance = nd.le + nd.lp + nd.rho * amb;
         }
         for pass in 0..2 {
             let eps = p.eps * mean_le;
@@ -298,15 +345,16 @@ pub fn solve(frame: &Frame, tracer: &Tracer, p: &Params) -> Solution {
                     (l.f > 0.0).then_some(l)
                 })
                 .collect();
+            stats.rays += tree.punctual(frame, tracer);
             for nd in tree.nodes.iter_mut() {
-                nd.radiance = nd.le;
+                nd.radiance = nd.le + nd.lp;
             }
             stats.iterations += tree.solve(roots, &links, p.tolerance * mean_le, 500);
             let _ = pass;
         }
     }
     stats.links = links.len();
-    // Direct light: one gather from the emission alone.
+    // Direct light: one gather from the emission alone, plus the punctual direct light.
     let leaves = tree.leaves(roots);
     let solved: Vec<Vec3> = tree.nodes.iter().map(|n| n.radiance).collect();
     let mut gathered = vec![Vec3::ZERO; tree.nodes.len()];

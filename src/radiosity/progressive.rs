@@ -4,12 +4,13 @@
 //! receiver to the shooter, so `F_ij A_i / A_j` of the lecture is evaluated at the receiver's
 //! points, exactly and with visibility rays), adds it to its radiance and to its own unshot
 //! radiance. The shooter's unshot radiance goes to zero. It stops when the unshot power falls
-//! under `tolerance` times the emitted power; until then the ambient term stands in for what
-//! is left.
+//! under `tolerance` times the source power; until then the ambient term stands in for what
+//! is left. The punctual lights' direct light (no element emits it) starts as reflected
+//! unshot radiance: its first shot is already indirect light.
 
 use super::form_factor::{self, Quality};
 use super::mesh::Mesh;
-use super::{ambient, element_materials, Solution, Stats};
+use super::{ambient, element_materials, punctual_direct, Solution, Stats};
 use crate::math::luminance;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -18,7 +19,8 @@ use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
 pub struct Params {
-    /// Stop when the unshot power is under this fraction of the emitted power.
+    /// Stop when the unshot power is under this fraction of the source power (emitted plus
+    /// the punctual lights' direct light).
     pub tolerance: f32,
     pub max_shots: usize,
     /// Form-factor quality for shots carrying at least 1% of the emitted power.
@@ -34,15 +36,21 @@ pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &Params) -> Solution
     let area: Vec<f32> = mesh.elems.iter().map(|e| e.area).collect();
     let corners: Vec<[Vec3; 3]> = (0..n).map(|e| mesh.corners(e)).collect();
     let normals: Vec<Vec3> = mesh.elems.iter().map(|e| e.normal).collect();
-    let mut radiance = le.clone();
-    let mut direct = vec![Vec3::ZERO; n];
+    // The punctual lights' direct light: all zero without them (then everything below is
+    // as for emitters alone).
+    let (lp, rays) = punctual_direct(frame, tracer, &mesh, &rho);
+    let mut radiance: Vec<Vec3> = (0..n).map(|i| le[i] + lp[i]).collect();
+    let mut direct = lp.clone();
     // Unshot radiance still to go: emitted (direct light when it lands) and reflected.
     let mut unshot_e = le.clone();
-    let mut unshot_r = vec![Vec3::ZERO; n];
-    let emitted: f32 = (0..n).map(|i| area[i] * luminance(le[i])).sum();
+    let mut unshot_r = lp;
+    let emitted: f32 = (0..n)
+        .map(|i| area[i] * luminance(le[i] + unshot_r[i]))
+        .sum();
     let mut stats = Stats {
         method: "progressive".into(),
         elements: n,
+        rays,
         ..Default::default()
     };
     let mut left = emitted;

@@ -5,10 +5,11 @@
 //! element a ray hits first (front side) receives `rho_j` times the ray's power over its
 //! area. A ray lands on `j` with probability `F_ij`, so each iteration is an unbiased Jacobi
 //! step `dL_j = rho_j sum_i F_ji dL_i`. Iterations stop when the unshot power falls under
-//! `tolerance` of the emitted power.
+//! `tolerance` of the source power. The punctual lights' direct light starts as unshot
+//! radiance beside the emission; what it sends on is indirect light.
 
 use super::mesh::Mesh;
-use super::{ambient, element_materials, Settings, Solution, Stats};
+use super::{ambient, element_materials, punctual_direct, Settings, Solution, Stats};
 use crate::math::{cosine_hemisphere, luminance, rng, triangle_barycentrics};
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -40,18 +41,22 @@ impl From<&Settings> for Params {
 /// the thread count).
 const CHUNK: usize = 4096;
 
-pub fn solve(frame: &Frame, mesh: Mesh, p: &Params) -> Solution {
+/// Solves on `mesh`; `tracer` (the frame's) gives the punctual lights' visibility.
+pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &Params) -> Solution {
     let start = std::time::Instant::now();
     let n = mesh.len();
     let (le, rho) = element_materials(frame, &mesh);
     let area: Vec<f32> = mesh.elems.iter().map(|e| e.area).collect();
-    let mut radiance = le.clone();
-    let mut direct = vec![Vec3::ZERO; n];
-    let mut unshot = le.clone();
-    let emitted: f32 = (0..n).map(|i| area[i] * luminance(le[i])).sum();
+    // The punctual lights' direct light: all zero without them.
+    let (lp, lp_rays) = punctual_direct(frame, tracer, &mesh, &rho);
+    let mut radiance: Vec<Vec3> = (0..n).map(|i| le[i] + lp[i]).collect();
+    let mut unshot = radiance.clone();
+    let mut direct = lp;
+    let emitted: f32 = (0..n).map(|i| area[i] * luminance(unshot[i])).sum();
     let mut stats = Stats {
         method: "stochastic".into(),
         elements: n,
+        rays: lp_rays,
         ..Default::default()
     };
     let mut left = emitted;
@@ -73,10 +78,13 @@ pub fn solve(frame: &Frame, mesh: Mesh, p: &Params) -> Solution {
             }
             let rays = p.rays;
             let iter = stats.iterations as u64;
+            // The first iteration's light from emission is direct light, from the punctual
+            // lights' direct light indirect: each ray also carries its emitted share.
+            let first = stats.iterations == 0;
             let chunks = rays.div_ceil(CHUNK);
             // Hits per chunk, summed in chunk order afterwards (the same sum for any number
             // of threads).
-            let hits: Vec<Vec<(u32, Vec3)>> = (0..chunks)
+            let hits: Vec<Vec<(u32, Vec3, Vec3)>> = (0..chunks)
                 .into_par_iter()
                 .map(|c| {
                     let mut got = Vec::with_capacity(CHUNK);
@@ -88,7 +96,9 @@ pub fn solve(frame: &Frame, mesh: Mesh, p: &Params) -> Solution {
                             continue;
                         }
                         // Power of the ray, in radiance-times-area units.
-                        let w = unshot[i] * (area[i] * left / power[i] / rays as f32);
+                        let scale = area[i] * left / power[i] / rays as f32;
+                        let w = unshot[i] * scale;
+                        let we = if first { le[i] * scale } else { Vec3::ZERO };
                         let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
                         let [a0, a1, a2] = mesh.corners(i);
                         let x = a0 * (1.0 - b.x - b.y) + a1 * b.x + a2 * b.y;
@@ -98,7 +108,7 @@ pub fn solve(frame: &Frame, mesh: Mesh, p: &Params) -> Solution {
                         if let Some(h) = tracer.intersect(o, d, f32::INFINITY) {
                             let j = h.tri as usize;
                             if mesh.elems[j].normal.dot(d) < 0.0 {
-                                got.push((j as u32, w));
+                                got.push((j as u32, w, we));
                             }
                         }
                     }
@@ -106,16 +116,17 @@ pub fn solve(frame: &Frame, mesh: Mesh, p: &Params) -> Solution {
                 })
                 .collect();
             let mut received = vec![Vec3::ZERO; n];
-            for (j, w) in hits.into_iter().flatten() {
+            let mut received_e = vec![Vec3::ZERO; n];
+            for (j, w, we) in hits.into_iter().flatten() {
                 received[j as usize] += w;
+                received_e[j as usize] += we;
             }
             stats.rays += rays as u64;
-            let first = stats.iterations == 0;
             for j in 0..n {
                 let dl = rho[j] * received[j] / area[j];
                 radiance[j] += dl;
                 if first {
-                    direct[j] += dl;
+                    direct[j] += rho[j] * received_e[j] / area[j];
                 }
                 unshot[j] = dl;
             }
@@ -143,6 +154,7 @@ mod tests {
     #[test]
     fn white_furnace_is_two_and_same_seed_same_solution() {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
+        let tr = Tracer::new(&f);
         let mesh = Mesh::uniform(&f, 0.5, 10_000);
         let p = Params {
             rays: 200_000,
@@ -150,7 +162,7 @@ mod tests {
             max_iterations: 100,
             seed: 3,
         };
-        let sol = solve(&f, mesh.clone(), &p);
+        let sol = solve(&f, &tr, mesh.clone(), &p);
         let a: f32 = sol.mesh.elems.iter().map(|e| e.area).sum();
         let shown: Vec<Vec3> = (0..sol.radiance.len())
             .map(|i| sol.radiance[i] + sol.ambient[i])
@@ -167,7 +179,7 @@ mod tests {
             .map(|l| (*l - Vec3::splat(2.0)).abs().max_element())
             .fold(0.0, f32::max);
         assert!(worst < 0.11, "worst {worst}");
-        let again = solve(&f, mesh, &p);
+        let again = solve(&f, &tr, mesh, &p);
         assert_eq!(sol.radiance, again.radiance);
     }
 }
