@@ -24,6 +24,18 @@ fn register_font() {
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
+    /// Text written beside each point (a swept knob's value), or empty.
+    pub tags: Vec<String>,
+}
+
+impl Series {
+    pub fn new(label: String, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            label,
+            points,
+            tags: Vec::new(),
+        }
+    }
 }
 
 /// What kind of chart.
@@ -32,6 +44,24 @@ pub enum Kind {
     Lines,
     /// One marker per point, coloured by its series.
     Scatter,
+    /// Lines through each series' points with a marker (and its tag) at each point.
+    Curves,
+}
+
+/// A reference mark drawn in grey under the data, with its own legend entry: the floor of a
+/// measurement.
+pub enum Shape {
+    /// A band from 0 up to `y`, edged by a dashed line.
+    BandBelow(f64),
+    /// A dashed vertical line at `x`.
+    VLine(f64),
+    /// A dashed line through the points.
+    Dashed(Vec<(f64, f64)>),
+}
+
+pub struct Guide {
+    pub label: String,
+    pub shape: Shape,
 }
 
 pub struct Chart<'a> {
@@ -40,6 +70,7 @@ pub struct Chart<'a> {
     pub y: &'a str,
     pub kind: Kind,
     pub series: &'a [Series],
+    pub guides: &'a [Guide],
 }
 
 fn color(i: usize) -> RGBColor {
@@ -91,22 +122,42 @@ fn finite(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
         .filter(|p| p.0.is_finite() && p.1.is_finite())
 }
 
-/// Axis ranges of the series, from 0 for non-negative data; `headroom` is the fraction of the
-/// y span added on top (room for the legend).
-fn bounds(series: &[Series], headroom: f64) -> ((f64, f64), (f64, f64)) {
+/// Axis ranges of the series and guides, from 0 for non-negative data; `headroom` is the
+/// fraction of the y span added on top (room for the legend).
+fn bounds(series: &[Series], guides: &[Guide], headroom: f64) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
+    let mut xs: Vec<f64> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
     for p in series.iter().flat_map(finite) {
-        x0 = x0.min(p.0);
-        x1 = x1.max(p.0);
-        y0 = y0.min(p.1);
-        y1 = y1.max(p.1);
+        xs.push(p.0);
+        ys.push(p.1);
     }
-    if !x0.is_finite() {
+    for g in guides {
+        match &g.shape {
+            Shape::BandBelow(y) => ys.push(*y),
+            Shape::VLine(x) => xs.push(*x),
+            Shape::Dashed(pts) => {
+                for p in pts {
+                    xs.push(p.0);
+                    ys.push(p.1);
+                }
+            }
+        }
+    }
+    for &x in xs.iter().filter(|v| v.is_finite()) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+    }
+    for &y in ys.iter().filter(|v| v.is_finite()) {
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if !x0.is_finite() || !y0.is_finite() {
         return ((0.0, 1.0), (0.0, 1.0));
     }
     let pad = |a: f64, b: f64, top: f64| {
@@ -125,12 +176,12 @@ where
     root.fill(&WHITE).map_err(e)?;
     // The legend sits top right above the data: for scatter charts that corner (slow and
     // inaccurate) rarely has a run, and it gets more headroom.
-    let headroom = if matches!(c.kind, Kind::Scatter) {
-        0.6
-    } else {
+    let headroom = if matches!(c.kind, Kind::Lines) {
         0.25
+    } else {
+        0.6
     };
-    let ((x0, x1), (y0, y1)) = bounds(c.series, headroom);
+    let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom);
     let mut chart = ChartBuilder::on(&root)
         .caption(c.title, ("sans-serif", 20))
         .margin(12)
@@ -150,6 +201,39 @@ where
         .axis_desc_style(("sans-serif", 15))
         .draw()
         .map_err(e)?;
+    // Guides first, under the data.
+    let grey = RGBColor(110, 110, 110);
+    for g in c.guides {
+        let style = grey.stroke_width(2);
+        match &g.shape {
+            Shape::BandBelow(y) => {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x0, 0.0f64.max(y0)), (x1, *y)],
+                        grey.mix(0.18).filled(),
+                    )))
+                    .map_err(e)?;
+                chart
+                    .draw_series(DashedLineSeries::new([(x0, *y), (x1, *y)], 8, 5, style))
+                    .map_err(e)?
+            }
+            Shape::VLine(x) => chart
+                .draw_series(DashedLineSeries::new([(*x, y0), (*x, y1)], 8, 5, style))
+                .map_err(e)?,
+            Shape::Dashed(pts) => chart
+                .draw_series(DashedLineSeries::new(
+                    pts.iter()
+                        .copied()
+                        .filter(|p| p.0.is_finite() && p.1.is_finite()),
+                    8,
+                    5,
+                    style,
+                ))
+                .map_err(e)?,
+        }
+        .label(g.label.clone())
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 14, y)], grey.stroke_width(2)));
+    }
     for (i, s) in c.series.iter().enumerate() {
         let col = color(i);
         match c.kind {
@@ -159,6 +243,27 @@ where
             Kind::Scatter => chart
                 .draw_series(finite(s).map(|p| Circle::new(p, 6, col.filled())))
                 .map_err(e)?,
+            Kind::Curves => {
+                chart
+                    .draw_series(finite(s).map(|p| Circle::new(p, 4, col.filled())))
+                    .map_err(e)?;
+                let tags = s
+                    .points
+                    .iter()
+                    .zip(&s.tags)
+                    .filter(|(p, _)| p.0.is_finite() && p.1.is_finite())
+                    .map(|(p, t)| {
+                        Text::new(
+                            t.clone(),
+                            *p,
+                            ("sans-serif", 11).into_font().color(&col.mix(0.9)),
+                        )
+                    });
+                chart.draw_series(tags).map_err(e)?;
+                chart
+                    .draw_series(LineSeries::new(finite(s), col.stroke_width(2)))
+                    .map_err(e)?
+            }
         }
         .label(s.label.clone())
         .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
