@@ -39,6 +39,7 @@ impl Series {
 }
 
 /// What kind of chart.
+#[derive(Clone, Copy)]
 pub enum Kind {
     /// Lines through each series' points.
     Lines,
@@ -71,6 +72,9 @@ pub struct Chart<'a> {
     pub kind: Kind,
     pub series: &'a [Series],
     pub guides: &'a [Guide],
+    /// A logarithmic x axis when the positive x values span more than 8x (points at x <= 0
+    /// are then left out).
+    pub log_x: bool,
 }
 
 fn color(i: usize) -> RGBColor {
@@ -124,7 +128,13 @@ fn finite(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
 
 /// Axis ranges of the series and guides, from 0 for non-negative data; `headroom` is the
 /// fraction of the y span added on top (room for the legend).
-fn bounds(series: &[Series], guides: &[Guide], headroom: f64) -> ((f64, f64), (f64, f64)) {
+/// (`log`: the x values are log10s, so the x axis does not start at 0.)
+fn bounds(
+    series: &[Series],
+    guides: &[Guide],
+    headroom: f64,
+    log: bool,
+) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -160,15 +170,64 @@ fn bounds(series: &[Series], guides: &[Guide], headroom: f64) -> ((f64, f64), (f
     if !x0.is_finite() || !y0.is_finite() {
         return ((0.0, 1.0), (0.0, 1.0));
     }
-    let pad = |a: f64, b: f64, top: f64| {
-        let lo = if a >= 0.0 { 0.0 } else { a - 0.05 * (b - a) };
+    let pad = |a: f64, b: f64, top: f64, from_zero: bool| {
+        let lo = if a >= 0.0 && from_zero {
+            0.0
+        } else {
+            a - 0.05 * (b - a)
+        };
         let d = (b - lo).max(1e-9 * b.abs().max(1.0));
         (lo, b + top * d)
     };
-    (pad(x0, x1, 0.08), pad(y0, y1, headroom))
+    (pad(x0, x1, 0.08, !log), pad(y0, y1, headroom, true))
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart) -> Result<()>
+/// `c` with every x replaced by its log10 when it asks for a log axis and its x values span
+/// more than 8x; None otherwise.
+fn log_x(c: &Chart) -> Option<(Vec<Series>, Vec<Guide>)> {
+    if !c.log_x {
+        return None;
+    }
+    let xs: Vec<f64> = c
+        .series
+        .iter()
+        .flat_map(finite)
+        .map(|p| p.0)
+        .filter(|&x| x > 0.0)
+        .collect();
+    let (lo, hi) = xs
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    if xs.is_empty() || hi < 8.0 * lo {
+        return None;
+    }
+    let t = |x: f64| if x > 0.0 { x.log10() } else { f64::NAN };
+    let series = c
+        .series
+        .iter()
+        .map(|s| Series {
+            label: s.label.clone(),
+            points: s.points.iter().map(|p| (t(p.0), p.1)).collect(),
+            tags: s.tags.clone(),
+        })
+        .collect();
+    let guides = c
+        .guides
+        .iter()
+        .map(|g| Guide {
+            label: g.label.clone(),
+            shape: match &g.shape {
+                Shape::BandBelow(y) => Shape::BandBelow(*y),
+                Shape::VLine(x) => Shape::VLine(t(*x)),
+                Shape::Dashed(pts) => Shape::Dashed(pts.iter().map(|p| (t(p.0), p.1)).collect()),
+            },
+        })
+        .collect();
+    Some((series, guides))
+}
+
+/// Draws `c`; `log` says its x values are log10s (labelled as the values).
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart, log: bool) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
@@ -181,7 +240,8 @@ where
     } else {
         0.6
     };
-    let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom);
+    let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom, log);
+    let x_label = |v: &f64| if log { short(10f64.powf(*v)) } else { short(*v) };
     let mut chart = ChartBuilder::on(&root)
         .caption(c.title, ("sans-serif", 20))
         .margin(12)
@@ -191,11 +251,15 @@ where
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc(c.x)
+        .x_desc(if log {
+            format!("{} (log scale)", c.x)
+        } else {
+            c.x.to_string()
+        })
         .y_desc(c.y)
         .x_labels(10)
         .y_labels(10)
-        .x_label_formatter(&|v| short(*v))
+        .x_label_formatter(&x_label)
         .y_label_formatter(&|v| short(*v))
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
@@ -283,15 +347,30 @@ where
 /// Draws a chart as SVG text and as an RGB PNG image.
 pub fn render(c: &Chart) -> Result<(String, image::RgbImage)> {
     register_font();
+    let logged = log_x(c);
+    let (c, log) = match &logged {
+        Some((series, guides)) => (
+            &Chart {
+                series,
+                guides,
+                log_x: false,
+                ..*c
+            },
+            true,
+        ),
+        None => (c, false),
+    };
     let mut svg = String::new();
     draw(
         SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area(),
         c,
+        log,
     )?;
     let mut buf = vec![0u8; (W * H * 3) as usize];
     draw(
         BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area(),
         c,
+        log,
     )?;
     let png = image::RgbImage::from_raw(W, H, buf).ok_or_else(|| anyhow!("chart buffer size"))?;
     Ok((svg, png))

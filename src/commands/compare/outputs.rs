@@ -286,6 +286,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Curves,
                 series: &flicker_error,
                 guides: &g_fe,
+                log_x: true,
             },
         ),
         (
@@ -297,6 +298,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Curves,
                 series: &warped_error,
                 guides: &g_we,
+                log_x: true,
             },
         ),
         (
@@ -308,6 +310,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Scatter,
                 series: &scatter,
                 guides: &g_relmse,
+                log_x: false,
             },
         ),
         (
@@ -319,6 +322,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Scatter,
                 series: &flicker_scatter,
                 guides: &g_f1,
+                log_x: false,
             },
         ),
         (
@@ -330,6 +334,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Lines,
                 series: &flicker_lines,
                 guides: &g_flicker_frames,
+                log_x: false,
             },
         ),
         (
@@ -341,6 +346,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Lines,
                 series: &warped_lines,
                 guides: &g_warped_frames,
+                log_x: false,
             },
         ),
         (
@@ -352,6 +358,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Lines,
                 series: &relmse_lines,
                 guides: &g_relmse_frames,
+                log_x: false,
             },
         ),
         (
@@ -363,6 +370,7 @@ fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(St
                 kind: Kind::Lines,
                 series: &replaced_lines,
                 guides: &[],
+                log_x: false,
             },
         ),
     ];
