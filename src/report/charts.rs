@@ -241,7 +241,13 @@ where
         0.6
     };
     let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom, log);
-    let x_label = |v: &f64| if log { short(10f64.powf(*v)) } else { short(*v) };
+    let x_label = |v: &f64| {
+        if log {
+            short(10f64.powf(*v))
+        } else {
+            short(*v)
+        }
+    };
     let mut chart = ChartBuilder::on(&root)
         .caption(c.title, ("sans-serif", 20))
         .margin(12)
