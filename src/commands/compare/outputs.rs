@@ -229,15 +229,21 @@ fn rows(results: &Results) -> Vec<html::Row> {
 }
 
 /// Prints the setting and the summary table.
-fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row]) {
+fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row]) -> std::io::Result<()> {
     let cfg = &plan.cfg;
-    println!("{}", notes.join("\n"));
-    println!(
+    crate::outln!("{}", notes.join("\n"))?;
+    crate::outln!(
         "{:14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10}",
-        "run", "s/frame", "relMSE", "FLIP", "flicker", "replaced", "accept"
-    );
+        "run",
+        "s/frame",
+        "relMSE",
+        "FLIP",
+        "flicker",
+        "replaced",
+        "accept"
+    )?;
     for r in rows {
-        println!(
+        crate::outln!(
             "{:14} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.3} {:>10}",
             r.label,
             r.seconds,
@@ -248,12 +254,12 @@ fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row]) {
             r.acceptance
                 .map(|a| format!("{a:.3}"))
                 .unwrap_or_else(|| "-".into())
-        );
+        )?;
     }
-    println!(
+    crate::outln!(
         "wrote {}/report.html, metrics.csv, metrics.json, charts/",
         cfg.out.display()
-    );
+    )
 }
 
 /// Writes every output of the comparison and prints its table.
@@ -279,6 +285,6 @@ pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
     );
     write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
 
-    print_table(plan, &notes, &rows);
+    print_table(plan, &notes, &rows)?;
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! The comparison's reference frames: path-traced once and kept in
-//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>/`, reused frame by frame
+//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>[_camera<hash>]/`, reused frame by frame
 //! whenever those settings match. The hash is of the scene's source (the file's bytes, or a
 //! built-in's generated glTF), so an edited file, or another file of the same name, gets a
 //! reference of its own.
@@ -26,8 +26,13 @@ pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
         })
         .collect();
     let s = &cfg.sequence;
+    // A --camera of its own: the same scene seen from elsewhere.
+    let camera = s
+        .camera
+        .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
+        .unwrap_or_default();
     cfg.cache.join("reference").join(format!(
-        "{name}_{:016x}_{}_{}spp_{}fps_seed{}",
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}{camera}",
         source_hash(spec),
         s.size,
         cfg.spp,
@@ -43,6 +48,10 @@ fn source_hash(spec: &str) -> u64 {
         .map(String::into_bytes)
         .or_else(|| std::fs::read(spec).ok())
         .unwrap_or_default();
+    fnv(&bytes)
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
@@ -138,6 +147,16 @@ mod tests {
         assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
         assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
         assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
+        // Another --camera, another reference; the same one, the same folder.
+        let with_camera = |spec: &str| {
+            let mut c = config::Compare::default();
+            c.sequence.camera = Some(spec.parse().unwrap());
+            dir(&c, "cornell")
+        };
+        let (c1, c2) = ("0,0,3.9:0,0,0:40", "0,0,3.9:0,0,0:41");
+        assert_ne!(with_camera(c1), dir_of("cornell", 256));
+        assert_ne!(with_camera(c1), with_camera(c2));
+        assert_eq!(with_camera(c1), with_camera(c1));
         std::fs::remove_dir_all(&root).unwrap();
     }
 }
