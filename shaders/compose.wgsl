@@ -1,7 +1,7 @@
 // Compose: emission seen from the camera (front faces only) + direct + indirect, then exposure
 // and the sRGB transfer for the 8-bit preview.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> direct: array<vec4f>;

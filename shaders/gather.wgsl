@@ -4,7 +4,7 @@
 // the VPLs i with i mod n^2 = k, scaled by n^2, and writes that irradiance-like sum without
 // the albedo: the `interleave` pass filters it and applies the albedo.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(3) var<storage, read> ism: array<f32>;
@@ -13,24 +13,26 @@
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= P.width || gid.y >= P.height {
+    // One read of the parameters into registers (a storage buffer is not hoisted).
+    let p = P;
+    if gid.x >= p.width || gid.y >= p.height {
         return;
     }
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
-    let pix = gid.y * P.width + gid.x;
+    let pix = gid.y * p.width + gid.x;
     if g.w == 0u {
         indirect[pix] = vec4f(0.0);
         return;
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
-    let texel_angle = 4.0 / f32(P.ism_size);
-    let side = max(P.interleave, 1u);
+    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let texel_angle = 4.0 / f32(p.ism_size);
+    let side = max(p.interleave, 1u);
     let step = side * side;
-    let first = ((gid.y + P.shift_y) % side) * side + (gid.x + P.shift_x) % side;
+    let first = ((gid.y + p.shift_y) % side) * side + (gid.x + p.shift_x) % side;
     var sum = vec3f(0.0);
-    for (var i = first; i < P.num_vpls; i += step) {
+    for (var i = first; i < p.num_vpls; i += step) {
         let v = vpls[i];
         let d = v.pos.xyz - x;
         let d2 = dot(d, d);
@@ -41,17 +43,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         if cos_x <= 0.0 || cos_y <= 0.0 {
             continue;
         }
-        let stored = ism[i * P.ism_size * P.ism_size + paraboloid_texel(-w, v.normal.xyz, P.ism_size)];
+        let stored = ism[i * p.ism_size * p.ism_size + paraboloid_texel(-w, v.normal.xyz, p.ism_size)];
         if stored >= 0.0 {
             // The footprint of the level the depth came from (filled holes: a coarser one).
             let footprint = dist * texel_angle * exp2(ism_level(stored));
             let tan_x = slope(cos_x);
-            let bias = P.ism_bias * footprint * (1.0 + tan_x) / P.far;
-            if dist / P.far > ism_depth(stored) + bias {
+            let bias = p.ism_bias * footprint * (1.0 + tan_x) / p.far;
+            if dist / p.far > ism_depth(stored) + bias {
                 continue;
             }
         }
-        sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, P.dmin * P.dmin)));
+        sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, p.dmin * p.dmin)));
     }
     if side > 1u {
         indirect[pix] = vec4f(sum * f32(step), 1.0);

@@ -8,7 +8,7 @@
 // accepted neighbour's value alone is an unbiased estimate of the full gather over the
 // pattern's random shift, so their mean is too.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> subsets: array<vec4f>;
@@ -22,10 +22,12 @@ const PLANE_REL: f32 = 0.01;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= P.width || gid.y >= P.height {
+    // One read of the parameters into registers (a storage buffer is not hoisted).
+    let p = P;
+    if gid.x >= p.width || gid.y >= p.height {
         return;
     }
-    let pix = gid.y * P.width + gid.x;
+    let pix = gid.y * p.width + gid.x;
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
     if g.w == 0u {
         indirect[pix] = vec4f(0.0);
@@ -33,9 +35,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
-    let tol = PLANE_REL * distance(x, P.cam_pos.xyz);
-    let side = i32(max(P.interleave, 1u));
+    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let tol = PLANE_REL * distance(x, p.cam_pos.xyz);
+    let side = i32(max(p.interleave, 1u));
     let even = side % 2 == 0;
     let h = side / 2;
     var sum = vec3f(0.0);
@@ -43,7 +45,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     for (var dy = -h; dy <= h; dy++) {
         for (var dx = -h; dx <= h; dx++) {
             let q = vec2i(gid.xy) + vec2i(dx, dy);
-            if q.x < 0 || q.y < 0 || q.x >= i32(P.width) || q.y >= i32(P.height) {
+            if q.x < 0 || q.y < 0 || q.x >= i32(p.width) || q.y >= i32(p.height) {
                 continue;
             }
             let gq = textureLoad(gbuf, q, 0);
@@ -51,13 +53,13 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
                 continue;
             }
             let xq = gbuffer_x(gq);
-            let nq = facing(tris[gq.w - 1u].n.xyz, xq, P.cam_pos.xyz);
+            let nq = facing(tris[gq.w - 1u].n.xyz, xq, p.cam_pos.xyz);
             if dot(nq, n) < NORMAL_COS || abs(dot(xq - x, n)) > tol {
                 continue;
             }
             let wx = select(1.0, 0.5, even && abs(dx) == h);
             let wy = select(1.0, 0.5, even && abs(dy) == h);
-            sum += wx * wy * subsets[u32(q.y) * P.width + u32(q.x)].xyz;
+            sum += wx * wy * subsets[u32(q.y) * p.width + u32(q.x)].xyz;
             count += wx * wy;
         }
     }

@@ -1,7 +1,7 @@
 //! Compose pass (`shaders/compose.wgsl`): emission + direct + indirect into the HDR frame,
 //! then exposure and sRGB into the 8-bit preview.
 
-use super::bindings::{bytes, read, read_write, texture, uniform, Elem, Group, Pass};
+use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{Params, Tri};
 use super::{Gpu, PixelPass};
 
@@ -11,7 +11,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("direct", Elem::Plain(16)),

@@ -228,7 +228,7 @@ impl Renderer {
         let params = gpu.buffer(
             "params",
             std::mem::size_of::<Params>() as u64,
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let tris = gpu.buffer("tris", bytes::<Tri>(tri_count as u64), storage);
         check_size(
