@@ -290,6 +290,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::gather::PASS,
         &super::interleave::PASS,
         &super::compose::PASS,
+        &crate::radiosity::hemicube::PASS,
     ]
 }
 
