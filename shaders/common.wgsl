@@ -49,7 +49,7 @@ struct Params {
     interleave: u32, // interleaved gather block side (1: off)
     shift_x: u32, // the interleave pattern's shift
     shift_y: u32,
-    _pad: u32,
+    near_points: u32,
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

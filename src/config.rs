@@ -148,6 +148,110 @@ impl Serialize for Size {
     }
 }
 
+/// `--camera EYE:TARGET:FOV`: a camera at `EYE` looking at `TARGET` with a vertical field of
+/// view of `FOV` degrees, e.g. `0,0,3.9:0,0,0:39.3` (points as `x,y,z`, in the scene's units).
+/// It replaces the scene's camera, animated or not, for every frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraSpec {
+    pub eye: glam::Vec3,
+    pub target: glam::Vec3,
+    /// Vertical field of view in degrees.
+    pub fov_deg: f32,
+}
+
+impl std::str::FromStr for CameraSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = |why: String| {
+            format!("'{s}' is not EYE:TARGET:FOV ({why}); e.g. 0,0,3.9:0,0,0:39.3 (points x,y,z; vertical field of view in degrees)")
+        };
+        let parts: Vec<&str> = s.split(':').collect();
+        let [eye, target, fov] = parts[..] else {
+            return Err(bad(format!(
+                "{} parts separated by ':', not 3",
+                parts.len()
+            )));
+        };
+        let point = |what: &str, p: &str| {
+            let v: Vec<&str> = p.split(',').collect();
+            if v.len() != 3 {
+                return Err(bad(format!("the {what} '{p}' is not three numbers x,y,z")));
+            }
+            let mut out = [0f32; 3];
+            for (o, x) in out.iter_mut().zip(&v) {
+                *o = x
+                    .trim()
+                    .parse()
+                    .map_err(|_| bad(format!("'{x}' in the {what} is not a number")))?;
+            }
+            Ok(glam::Vec3::from_array(out))
+        };
+        Ok(CameraSpec {
+            eye: point("eye", eye)?,
+            target: point("target", target)?,
+            fov_deg: fov
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("the field of view '{fov}' is not a number")))?,
+        })
+    }
+}
+
+impl std::fmt::Display for CameraSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (e, t) = (self.eye, self.target);
+        write!(
+            f,
+            "{},{},{}:{},{},{}:{}",
+            e.x, e.y, e.z, t.x, t.y, t.z, self.fov_deg
+        )
+    }
+}
+
+impl Serialize for CameraSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+impl CameraSpec {
+    /// Finite points within the loader's coordinate limit, eye apart from target, a field of
+    /// view strictly between 0 and 180 degrees (within what the renderer takes).
+    pub fn validate(&self) -> Result<()> {
+        let lim = crate::scene::load::MAX_COORD;
+        for (what, p) in [("eye", self.eye), ("target", self.target)] {
+            if !p.is_finite() {
+                bail!("--camera {self}: the {what} is not a finite point");
+            }
+            if p.abs().max_element() > lim {
+                bail!("--camera {self}: the {what} is farther than {lim:e} from the origin");
+            }
+        }
+        let d = (self.target - self.eye).length();
+        if d <= 1e-6 * self.eye.abs().max_element().max(1.0) {
+            bail!("--camera {self}: the eye and the target are the same point");
+        }
+        let (lo, hi) = crate::scene::load::FOV_RANGE;
+        let fov = self.fov_deg;
+        if !(fov.is_finite() && fov >= lo.to_degrees() && fov <= hi.to_degrees()) {
+            bail!(
+                "--camera {self}: the field of view {fov} degrees is out of range: it must be between 0 and 180 degrees ({:.2} to {:.1})",
+                lo.to_degrees(),
+                hi.to_degrees()
+            );
+        }
+        Ok(())
+    }
+
+    /// Puts this camera in `scene` in place of its own (for every frame).
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        self.validate()?;
+        scene
+            .set_camera(self.eye, self.target, self.fov_deg.to_radians())
+            .map_err(|e| anyhow::anyhow!("--camera {self}: {e}"))
+    }
+}
+
 /// The sequence every rendering command renders: scene, image size, frames, rate and seed.
 #[derive(Args, Clone, Debug, Serialize)]
 pub struct Sequence {
@@ -166,6 +270,10 @@ pub struct Sequence {
     /// Random seed; the same seed gives the same frames
     #[arg(long, default_value_t = Sequence::default().seed, allow_hyphen_values = true)]
     pub seed: u64,
+    /// Camera EYE:TARGET:FOV, e.g. 0,0,3.9:0,0,0:39.3 (points x,y,z in scene units, vertical
+    /// field of view in degrees): replaces the scene's camera, animated or not, in every frame
+    #[arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")]
+    pub camera: Option<CameraSpec>,
 }
 
 impl Default for Sequence {
@@ -179,13 +287,26 @@ impl Default for Sequence {
             frames: None,
             fps: 24.0,
             seed: 1,
+            camera: None,
         }
     }
 }
 
 impl Sequence {
     pub fn validate(&self) -> Result<()> {
-        check::float("--fps", self.fps, 0.0, true, 1000.0)
+        check::float("--fps", self.fps, 0.0, true, 1000.0)?;
+        match &self.camera {
+            Some(c) => c.validate(),
+            None => Ok(()),
+        }
+    }
+    /// Loads the scene named (or `default`), prints its warnings, and puts `--camera` in it.
+    pub fn load_scene(&self, default: &str) -> Result<Scene> {
+        let mut scene = crate::commands::load_scene(self.scene_or(default))?;
+        if let Some(c) = &self.camera {
+            c.apply(&mut scene)?;
+        }
+        Ok(scene)
     }
     /// The scene named, or `default`.
     pub fn scene_or<'a>(&'a self, default: &'a str) -> &'a str {

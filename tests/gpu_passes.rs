@@ -221,6 +221,7 @@ fn indirect(
         vpls,
         lights: &[],
         dmin,
+        near: &[],
     };
     r.render(&input, true).unwrap().indirect.unwrap()
 }

@@ -28,7 +28,9 @@ gpu_struct! {
         pub interleave: u32,
         pub shift_x: u32,
         pub shift_y: u32,
-        pub _pad: u32,
+        /// Ray-cast near-field points each redrawn ISM slot splats besides its subset of the
+        /// point set (stored after the point set, `near_points` per slot; see `ism`).
+        pub near_points: u32,
     }
 }
 

@@ -421,21 +421,33 @@ fn floor_row(floor: &Floor) -> html::FloorRow {
 }
 
 /// Prints the setting and the summary table.
-fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row], floor: &html::FloorRow) {
+fn print_table(
+    plan: &Plan,
+    notes: &[String],
+    rows: &[html::Row],
+    floor: &html::FloorRow,
+) -> std::io::Result<()> {
     let cfg = &plan.cfg;
-    println!("{}", notes.join("\n"));
+    crate::outln!("{}", notes.join("\n"))?;
     let width = rows
         .iter()
         .map(|r| r.label.len())
         .chain([14, "reference floor".len()])
         .max()
         .unwrap_or(14);
-    println!(
+    crate::outln!(
         "{:width$} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10} {:>10}",
-        "run", "s/frame", "relMSE", "FLIP", "flicker", "warped", "replaced", "accept"
-    );
+        "run",
+        "s/frame",
+        "relMSE",
+        "FLIP",
+        "flicker",
+        "warped",
+        "replaced",
+        "accept"
+    )?;
     for r in rows {
-        println!(
+        crate::outln!(
             "{:width$} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.5} {:>10.3} {:>10}",
             r.label,
             r.seconds,
@@ -447,9 +459,9 @@ fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row], floor: &html::
             r.acceptance
                 .map(|a| format!("{a:.3}"))
                 .unwrap_or_else(|| "-".into())
-        );
+        )?;
     }
-    println!(
+    crate::outln!(
         "{:width$} {:>10} {:>10.5} {:>8} {:>10.5} {:>10} {:>10} {:>10}",
         "reference floor",
         "-",
@@ -462,11 +474,11 @@ fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row], floor: &html::
             .unwrap_or_else(|| "-".into()),
         "-",
         "-"
-    );
-    println!(
+    )?;
+    crate::outln!(
         "wrote {}/report.html, metrics.csv, metrics.json, charts/",
         cfg.out.display()
-    );
+    )
 }
 
 /// Writes every output of the comparison and prints its table.
@@ -503,6 +515,6 @@ pub fn write(plan: &Plan, reference: &[Hdr], floor: &Floor, results: &Results) -
     );
     write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
 
-    print_table(plan, &notes, &rows, &floor_row);
+    print_table(plan, &notes, &rows, &floor_row)?;
     Ok(())
 }

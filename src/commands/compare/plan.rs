@@ -46,7 +46,7 @@ impl Plan {
     pub fn new(cfg: &config::Compare) -> Result<Plan> {
         cfg.validate()?;
         let spec = cfg.scene_name().to_string();
-        let scene = super::super::load_scene(&spec)?;
+        let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
         let (frames, note) = cfg.sequence.frames_or_all(scene.duration());
         if let Some(note) = note {
             eprintln!("note: {note}");

@@ -3,10 +3,10 @@
 //! `a` has `ceil(spp / 2)` samples a pixel and half `b` `floor(spp / 2)`, each with its own seed
 //! derived from `--seed`; the reference is their spp-weighted mean, so it is a `spp`-sample
 //! estimate like any other. The halves are kept in
-//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>_halves<A>+<B>/{a,b}/`
+//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>_halves<A>+<B>[_camera<hash>]/{a,b}/`
 //! and reused frame by frame whenever those settings match. The hash is of the scene's
 //! source (the file's bytes, or a built-in's generated glTF), so an edited file, or another
-//! file of the same name, gets a reference of its own. Caches written before the halves (one
+//! file of the same name, gets a reference of its own, and so does another `--camera`. Caches written before the halves (one
 //! image a frame, folder name without `_halves`) are never matched, so never misread.
 
 use super::plan::Plan;
@@ -50,9 +50,14 @@ pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
         })
         .collect();
     let s = &cfg.sequence;
+    // A --camera of its own: the same scene seen from elsewhere.
+    let camera = s
+        .camera
+        .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
+        .unwrap_or_default();
     let [a, b] = halves(cfg.spp);
     cfg.cache.join("reference").join(format!(
-        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}",
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}",
         source_hash(spec),
         s.size,
         cfg.spp,
@@ -68,6 +73,10 @@ fn source_hash(spec: &str) -> u64 {
         .map(String::into_bytes)
         .or_else(|| std::fs::read(spec).ok())
         .unwrap_or_default();
+    fnv(&bytes)
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
@@ -209,6 +218,16 @@ mod tests {
         assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
         assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
         assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
+        // Another --camera, another reference; the same one, the same folder.
+        let with_camera = |spec: &str| {
+            let mut c = config::Compare::default();
+            c.sequence.camera = Some(spec.parse().unwrap());
+            dir(&c, "cornell")
+        };
+        let (c1, c2) = ("0,0,3.9:0,0,0:40", "0,0,3.9:0,0,0:41");
+        assert_ne!(with_camera(c1), dir_of("cornell", 256));
+        assert_ne!(with_camera(c1), with_camera(c2));
+        assert_eq!(with_camera(c1), with_camera(c1));
         std::fs::remove_dir_all(&root).unwrap();
     }
 
