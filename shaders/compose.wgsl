@@ -25,6 +25,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         c += direct[pix].xyz + indirect[pix].xyz;
     }
     hdr[pix] = vec4f(c, 1.0);
+    // Supersampled, `resolve` makes the preview from the box-filtered pixels.
+    if P.aa > 1u {
+        return;
+    }
     let t = clamp(c * P.exposure, vec3f(0.0), vec3f(1.0));
     let s = vec3u(vec3f(srgb_oetf(t.x), srgb_oetf(t.y), srgb_oetf(t.z)) * 255.0 + 0.5);
     ldr[pix] = s.x | (s.y << 8u) | (s.z << 16u) | (255u << 24u);

@@ -1,5 +1,8 @@
 // Direct light: every pixel sums the stratified emitter samples, each with the visibility its
 // shadow hemicube gives.
+// Supersampled (P.aa = S > 1), the S^2 sub-samples of a pixel split the emitter samples:
+// the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that the
+// pixel's resolve holds every sample once at the cost of one sample point per pixel.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -40,7 +43,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
     let size = f32(P.shadow_size);
     var sum = vec3f(0.0);
-    for (var j = 0u; j < P.num_light_samples; j++) {
+    let s = max(P.aa, 1u);
+    for (var j = subsample_tile(gid.xy, vec2u(P.width, P.height), P.aa); j < P.num_light_samples; j += s * s) {
         let ls = lights[j];
         let d = x - ls.pos.xyz;
         let d2 = dot(d, d);
@@ -63,5 +67,5 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
         sum += ls.radiance.xyz * (cos_l * cos_x / d2);
     }
-    direct[pix] = vec4f(sum * tri.albedo.xyz / PI, 1.0);
+    direct[pix] = vec4f(sum * f32(s * s) * tri.albedo.xyz / PI, 1.0);
 }

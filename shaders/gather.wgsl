@@ -3,6 +3,11 @@
 // the pixel at block position k = ((y + shift_y) mod n) * n + (x + shift_x) mod n sums only
 // the VPLs i with i mod n^2 = k, scaled by n^2, and writes that irradiance-like sum without
 // the albedo: the `interleave` pass filters it and applies the albedo.
+// Supersampled (P.aa = S > 1), the S^2 sub-samples of a pixel (one per tile of the grid) split
+// the VPLs further: the sub-sample of tile t sums the VPLs i with i mod (n^2 S^2) = k S^2 + t,
+// scaled by n^2 S^2, so that a pixel's resolve (the mean of its sub-samples) holds every VPL
+// once while each sub-sample gathers 1/S^2 of what it would alone: the gather costs what it
+// costs without supersampling.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -27,8 +32,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
     let texel_angle = 4.0 / f32(P.ism_size);
     let side = max(P.interleave, 1u);
-    let step = side * side;
-    let first = ((gid.y + P.shift_y) % side) * side + (gid.x + P.shift_x) % side;
+    let s = max(P.aa, 1u);
+    let step = side * side * s * s;
+    let first = (((gid.y + P.shift_y) % side) * side + (gid.x + P.shift_x) % side) * s * s
+        + subsample_tile(gid.xy, vec2u(P.width, P.height), P.aa);
     var sum = vec3f(0.0);
     for (var i = first; i < P.num_vpls; i += step) {
         let v = vpls[i];
@@ -56,6 +63,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     if side > 1u {
         indirect[pix] = vec4f(sum * f32(step), 1.0);
     } else {
-        indirect[pix] = vec4f(sum * tri.albedo.xyz, 1.0);
+        indirect[pix] = vec4f(sum * f32(step) * tri.albedo.xyz, 1.0);
     }
 }

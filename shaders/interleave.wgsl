@@ -7,6 +7,8 @@
 // weight one; any
 // accepted neighbour's value alone is an unbiased estimate of the full gather over the
 // pattern's random shift, so their mean is too.
+// Supersampled (P.aa = S > 1) the grid is S x S tiles, each a whole image: the window
+// keeps to the pixel's own tile.
 
 @group(0) @binding(0) var<uniform> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -38,12 +40,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let side = i32(max(P.interleave, 1u));
     let even = side % 2 == 0;
     let h = side / 2;
+    // The pixel's tile of the sub-sample grid (the whole grid without supersampling).
+    let s = max(P.aa, 1u);
+    let tile = vec2u(P.width / s, P.height / s);
+    let lo = vec2i((gid.xy / tile) * tile);
+    let hi = lo + vec2i(tile);
     var sum = vec3f(0.0);
     var count = 0.0;
     for (var dy = -h; dy <= h; dy++) {
         for (var dx = -h; dx <= h; dx++) {
             let q = vec2i(gid.xy) + vec2i(dx, dy);
-            if q.x < 0 || q.y < 0 || q.x >= i32(P.width) || q.y >= i32(P.height) {
+            if q.x < lo.x || q.y < lo.y || q.x >= hi.x || q.y >= hi.y {
                 continue;
             }
             let gq = textureLoad(gbuf, q, 0);

@@ -271,6 +271,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::gather::PASS,
         &super::interleave::PASS,
         &super::compose::PASS,
+        &super::resolve::PASS,
     ]
 }
 

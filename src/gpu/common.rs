@@ -28,7 +28,9 @@ gpu_struct! {
         pub interleave: u32,
         pub shift_x: u32,
         pub shift_y: u32,
-        pub _pad: u32,
+        /// Supersampling: sub-samples per pixel side (width and height above are the
+        /// sub-sample grid's, `aa` times the output's).
+        pub aa: u32,
     }
 }
 
