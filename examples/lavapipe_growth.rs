@@ -1,10 +1,11 @@
 //! A standalone repro of the memory growth seen on Vulkan through lavapipe (Mesa 22.3.6):
 //! the `direct` pass's shader (shaders/common.wgsl + shaders/direct.wgsl) dispatched 600 times
-//! on an empty G-buffer (every invocation returns early) grows the process by about 0.18 MiB
-//! a dispatch; with its light loop replaced by one iteration's reads (`noloop`) it stays flat.
-//! Found so far: neither the loop's texture read, its dynamic layer index, its `continue`s
-//! nor its helper calls (face_coords, basis, slope) are the trigger on their own.
-//! `cargo run --release --example lavapipe_growth -- [full|noloop]`
+//! on an empty G-buffer (every invocation returns early). With its parameters in a uniform
+//! buffer (`uniform`) the process grows about 0.18 MiB a dispatch (78 -> 196 MiB): lavapipe
+//! inlines uniform values that the light loop depends on and recompiles the shader at every
+//! dispatch, keeping each copy. Without the loop (`noloop`), or with the parameters in a
+//! read-only storage buffer as irad binds them (`storage`), it stays flat.
+//! `cargo run --release --example lavapipe_growth -- [storage|uniform|noloop]`
 
 fn rss_mib() -> f64 {
     std::fs::read_to_string("/proc/self/statm")
@@ -42,10 +43,13 @@ fn texture(
 
 fn main() -> anyhow::Result<()> {
     irad::gpu::quiet_mesa_runtime_dir();
-    let mode = std::env::args().nth(1).unwrap_or_else(|| "full".into());
+    let mode = std::env::args().nth(1).unwrap_or_else(|| "storage".into());
     let gpu = irad::gpu::Gpu::new(irad::gpu::BackendChoice::Vulkan)?;
     println!("adapter: {}", gpu.adapter);
     let mut src = include_str!("../shaders/direct.wgsl").to_string();
+    if mode != "storage" {
+        src = src.replace("var<storage, read> P: Params", "var<uniform> P: Params");
+    }
     if mode == "noloop" {
         let a = src.find("    for (var j = 0u;").expect("the light loop");
         let b = src.find("    direct[pix] = vec4f(sum").expect("the store");
@@ -69,7 +73,7 @@ fn main() -> anyhow::Result<()> {
     let params = gpu.buffer(
         "params",
         256,
-        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
     );
     let mut p = [0u32; 24];
     (p[0], p[1], p[6], p[7]) = (256, 256, 1, 8);

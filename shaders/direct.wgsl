@@ -4,7 +4,7 @@
 // the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that the
 // pixel's resolve holds every sample once at the cost of one sample point per pixel.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var<storage, read> lights: array<LightSample>;
 @group(0) @binding(3) var shadows: texture_2d_array<u32>;
@@ -29,22 +29,24 @@ fn face_coords(l: vec3f) -> vec4f {
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= P.width || gid.y >= P.height {
+    // One read of the parameters into registers (a storage buffer is not hoisted).
+    let p = P;
+    if gid.x >= p.width || gid.y >= p.height {
         return;
     }
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
-    let pix = gid.y * P.width + gid.x;
+    let pix = gid.y * p.width + gid.x;
     if g.w == 0u {
         direct[pix] = vec4f(0.0);
         return;
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
-    let size = f32(P.shadow_size);
+    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let size = f32(p.shadow_size);
     var sum = vec3f(0.0);
-    let s = max(P.aa, 1u);
-    for (var j = subsample_tile(gid.xy, vec2u(P.width, P.height), P.aa); j < P.num_light_samples; j += s * s) {
+    let s = max(p.aa, 1u);
+    for (var j = subsample_tile(gid.xy, vec2u(p.width, p.height), s); j < p.num_light_samples; j += s * s) {
         let ls = lights[j];
         let d = x - ls.pos.xyz;
         let d2 = dot(d, d);
@@ -58,10 +60,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         let ln = ls.normal.xyz;
         let l = vec3f(dot(w, basis_t(ln)), dot(w, basis_b(ln)), cos_l);
         let fc = face_coords(l);
-        let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * size)), vec2i(0), vec2i(i32(P.shadow_size) - 1));
+        let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
         let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u + u32(fc.x)), 0).x);
         let tan_x = slope(cos_x);
-        let bias = P.shadow_bias * dist * (2.0 / size) * (1.0 + tan_x) + P.near;
+        let bias = p.shadow_bias * dist * (2.0 / size) * (1.0 + tan_x) + p.near;
         if stored > 0.0 && stored < dist - bias {
             continue;
         }

@@ -10,7 +10,7 @@
 // Supersampled (P.aa = S > 1) the grid is S x S tiles, each a whole image: the window
 // keeps to the pixel's own tile.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> subsets: array<vec4f>;
@@ -24,10 +24,12 @@ const PLANE_REL: f32 = 0.01;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= P.width || gid.y >= P.height {
+    // One read of the parameters into registers (a storage buffer is not hoisted).
+    let p = P;
+    if gid.x >= p.width || gid.y >= p.height {
         return;
     }
-    let pix = gid.y * P.width + gid.x;
+    let pix = gid.y * p.width + gid.x;
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
     if g.w == 0u {
         indirect[pix] = vec4f(0.0);
@@ -35,14 +37,14 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, P.cam_pos.xyz);
-    let tol = PLANE_REL * distance(x, P.cam_pos.xyz);
-    let side = i32(max(P.interleave, 1u));
+    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let tol = PLANE_REL * distance(x, p.cam_pos.xyz);
+    let side = i32(max(p.interleave, 1u));
     let even = side % 2 == 0;
     let h = side / 2;
     // The pixel's tile of the sub-sample grid (the whole grid without supersampling).
-    let s = max(P.aa, 1u);
-    let tile = vec2u(P.width / s, P.height / s);
+    let s = max(p.aa, 1u);
+    let tile = vec2u(p.width / s, p.height / s);
     let lo = vec2i((gid.xy / tile) * tile);
     let hi = lo + vec2i(tile);
     var sum = vec3f(0.0);
@@ -58,16 +60,18 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
                 continue;
             }
             let xq = gbuffer_x(gq);
-            let nq = facing(tris[gq.w - 1u].n.xyz, xq, P.cam_pos.xyz);
+            let nq = facing(tris[gq.w - 1u].n.xyz, xq, p.cam_pos.xyz);
             if dot(nq, n) < NORMAL_COS || abs(dot(xq - x, n)) > tol {
                 continue;
             }
             let wx = select(1.0, 0.5, even && abs(dx) == h);
             let wy = select(1.0, 0.5, even && abs(dy) == h);
-            sum += wx * wy * subsets[u32(q.y) * P.width + u32(q.x)].xyz;
+            sum += wx * wy * subsets[u32(q.y) * p.width + u32(q.x)].xyz;
             count += wx * wy;
         }
     }
     // The pixel itself always passes (weight 1): count >= 1.
-    indirect[pix] = vec4f(sum / count * tri.albedo.xyz, 1.0);
+    // Supersampled, compose applies each sub-sample's own albedo.
+    let albedo = select(tri.albedo.xyz, vec3f(1.0), p.aa > 1u);
+    indirect[pix] = vec4f(sum / count * albedo, 1.0);
 }

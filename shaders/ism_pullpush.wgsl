@@ -5,7 +5,7 @@
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(3) var<storage, read> slots: array<vec2u>;
@@ -16,7 +16,7 @@ struct Level {
     parent_offset: u32, // start of the coarser level (pull writes it, push reads it)
     size: u32,          // tile side at this level
 }
-@group(1) @binding(0) var<uniform> L: Level;
+@group(1) @binding(0) var<storage, read> L: Level;
 
 @compute @workgroup_size(64)
 fn decode(@builtin(global_invocation_id) gid: vec3u) {

@@ -3,7 +3,7 @@
 // `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other slots keep
 // their tiles.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 struct Point {
     tri: u32,

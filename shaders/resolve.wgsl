@@ -7,7 +7,7 @@
 // so the resolved parts still sum to the resolved frame), then the 8-bit preview is taken
 // from the resolved HDR.
 
-@group(0) @binding(0) var<uniform> P: Params;
+@group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> hdr_in: array<vec4f>;
 @group(0) @binding(2) var<storage, read> direct_in: array<vec4f>;
 @group(0) @binding(3) var<storage, read> indirect_in: array<vec4f>;
@@ -18,9 +18,11 @@
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
-    let s = max(P.aa, 1u);
-    let w = P.width / s;
-    let h = P.height / s;
+    // One read of the parameters into registers (a storage buffer is not hoisted).
+    let p = P;
+    let s = max(p.aa, 1u);
+    let w = p.width / s;
+    let h = p.height / s;
     if gid.x >= w || gid.y >= h {
         return;
     }
@@ -29,7 +31,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     var i = vec3f(0.0);
     for (var ty = 0u; ty < s; ty++) {
         for (var tx = 0u; tx < s; tx++) {
-            let q = (ty * h + gid.y) * P.width + tx * w + gid.x;
+            let q = (ty * h + gid.y) * p.width + tx * w + gid.x;
             c += hdr_in[q].xyz;
             d += direct_in[q].xyz;
             i += indirect_in[q].xyz;
@@ -41,7 +43,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     hdr[pix] = vec4f(c, 1.0);
     direct[pix] = vec4f(d * k, 1.0);
     indirect[pix] = vec4f(i * k, 1.0);
-    let t = clamp(c * P.exposure, vec3f(0.0), vec3f(1.0));
+    let t = clamp(c * p.exposure, vec3f(0.0), vec3f(1.0));
     let q = vec3u(vec3f(srgb_oetf(t.x), srgb_oetf(t.y), srgb_oetf(t.z)) * 255.0 + 0.5);
     ldr[pix] = q.x | (q.y << 8u) | (q.z << 16u) | (255u << 24u);
 }

@@ -79,6 +79,12 @@ pub(crate) enum Kind {
         ty: &'static StructLayout,
         dynamic: bool,
     },
+    /// `var<storage, read> name: Struct`: a compute pass's parameters. Compute passes read
+    /// their parameters from a read-only storage buffer, not a uniform buffer: lavapipe
+    /// (Mesa 22.3) inlines uniform-buffer values that a loop depends on and recompiles the
+    /// shader at every dispatch, keeping each compiled copy (0.18 MiB a dispatch for the
+    /// direct pass; `examples/lavapipe_growth.rs`). Storage buffers are not inlined.
+    Params(&'static StructLayout),
     /// `var<storage, read|read_write> name: array<elem>`.
     Storage { elem: Elem, read_only: bool },
     /// `var name: texture_2d<u32>` (or `texture_2d_array<u32>`), read with `textureLoad`.
@@ -107,10 +113,21 @@ pub(crate) struct Pass {
     pub groups: &'static [Group],
 }
 
+/// A uniform at a fixed offset (no pass uses one now that the G-buffer's cameras sit at
+/// dynamic offsets; the layout test still checks the kind).
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) const fn uniform(name: &'static str, ty: &'static StructLayout) -> Binding {
     Binding {
         name,
         kind: Kind::Uniform { ty, dynamic: false },
+    }
+}
+
+/// A compute pass's parameters: `var<storage, read> name: Struct` (see [`Kind::Params`]).
+pub(crate) const fn params(name: &'static str, ty: &'static StructLayout) -> Binding {
+    Binding {
+        name,
+        kind: Kind::Params(ty),
     }
 }
 
@@ -164,6 +181,11 @@ impl Binding {
             Kind::Uniform { ty, dynamic } => {
                 buffer(wgpu::BufferBindingType::Uniform, *dynamic, ty.size as u64)
             }
+            Kind::Params(ty) => buffer(
+                wgpu::BufferBindingType::Storage { read_only: true },
+                false,
+                ty.size as u64,
+            ),
             Kind::Storage { elem, read_only } => buffer(
                 wgpu::BufferBindingType::Storage {
                     read_only: *read_only,
@@ -317,6 +339,12 @@ mod tests {
                 (Kind::Uniform { ty, .. }, AddressSpace::Uniform, _) => {
                     errs.extend(check_struct(&module, &layouter, var.ty, ty, &at));
                 }
+                (Kind::Params(ty), AddressSpace::Storage { access }, TypeInner::Struct { .. }) => {
+                    if access.contains(StorageAccess::STORE) {
+                        errs.push(format!("{at}: parameters are read_write in WGSL"));
+                    }
+                    errs.extend(check_struct(&module, &layouter, var.ty, ty, &at));
+                }
                 (
                     Kind::Storage { elem, read_only },
                     AddressSpace::Storage { access },
@@ -434,6 +462,24 @@ mod tests {
             errs.len(),
             errs.join("\n")
         );
+    }
+
+    /// No compute pass reads a uniform buffer (see [`Kind::Params`]: on lavapipe that
+    /// recompiles the shader at every dispatch and the process grows without bound).
+    #[test]
+    fn compute_passes_take_their_parameters_from_storage() {
+        let uniforms: Vec<String> = all_passes()
+            .into_iter()
+            .flat_map(|p| p.groups.iter().map(move |g| (p.name, g)))
+            .filter(|(_, g)| g.stages.contains(wgpu::ShaderStages::COMPUTE))
+            .flat_map(|(name, g)| {
+                g.bindings
+                    .iter()
+                    .filter(|b| matches!(b.kind, Kind::Uniform { .. }))
+                    .map(move |b| format!("{name}: `{}`", b.name))
+            })
+            .collect();
+        assert!(uniforms.is_empty(), "compute uniforms: {uniforms:?}");
     }
 
     /// The checker itself finds a drift: a table naming, typing or ordering a binding

@@ -1,7 +1,7 @@
 //! Direct-light pass (`shaders/direct.wgsl`): stratified emitter samples with shadow
 //! hemicube visibility. Its CPU twin is `reference::twin::direct`.
 
-use super::bindings::{read, read_write, texture, uniform, Elem, Group, Pass};
+use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{LightSample, Params, Tri};
 use super::{Gpu, PixelPass};
 
@@ -11,7 +11,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             read("lights", Elem::Struct(&LightSample::LAYOUT)),
             texture("shadows", wgpu::TextureViewDimension::D2Array),

@@ -1,7 +1,7 @@
 //! Gather pass (`shaders/gather.wgsl`): indirect light of all VPLs per pixel with ISM
 //! visibility. Its CPU twin, with ray-traced visibility, is `reference::twin::gather`.
 
-use super::bindings::{read, read_write, texture, uniform, Elem, Group, Pass};
+use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{Params, Tri, Vpl};
 use super::{Gpu, PixelPass};
 
@@ -11,7 +11,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             read("vpls", Elem::Struct(&Vpl::LAYOUT)),
             read("ism", Elem::Plain(4)),

@@ -5,7 +5,7 @@
 //! al. 2006). `Renderer::interleave_shift` moves the pattern: over a uniformly random shift
 //! every pixel's filtered value is an unbiased estimate of the full gather.
 
-use super::bindings::{bytes, read, read_write, texture, uniform, Elem, Group, Pass};
+use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{Params, Tri};
 use super::{Gpu, PixelPass};
 
@@ -15,7 +15,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("subsets", Elem::Plain(16)),

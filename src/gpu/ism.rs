@@ -8,7 +8,7 @@
 //! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
 //! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
 
-use super::bindings::{bytes, gpu_struct, read, read_write, uniform, Elem, Group, Pass};
+use super::bindings::{bytes, gpu_struct, params, read, read_write, Elem, Group, Pass};
 use super::common::{Params, Tri, Vpl};
 use super::{dispatch, groups_1d, Gpu};
 use crate::math::{rng, triangle_barycentrics};
@@ -44,7 +44,7 @@ pub(crate) const SPLAT: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             read("points", Elem::Struct(&Point::LAYOUT)),
             read("vpls", Elem::Struct(&Vpl::LAYOUT)),
@@ -61,7 +61,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
         Group {
             stages: wgpu::ShaderStages::COMPUTE,
             bindings: &[
-                uniform("P", &Params::LAYOUT),
+                params("P", &Params::LAYOUT),
                 read("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
                 read("slots", Elem::Plain(8)),
@@ -69,7 +69,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
         },
         Group {
             stages: wgpu::ShaderStages::COMPUTE,
-            bindings: &[uniform("L", &Level::LAYOUT)],
+            bindings: &[params("L", &Level::LAYOUT)],
         },
     ],
 };
@@ -195,7 +195,7 @@ impl Ism {
                 let u = gpu.buffer(
                     "ism level",
                     std::mem::size_of::<Level>() as u64,
-                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 );
                 let lv = Level {
                     level: l,

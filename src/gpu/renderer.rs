@@ -257,7 +257,7 @@ impl Renderer {
         let params = gpu.buffer(
             "params",
             std::mem::size_of::<Params>() as u64,
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let tris = gpu.buffer("tris", bytes::<Tri>(tri_count as u64), storage);
         check_size(
@@ -336,15 +336,15 @@ impl Renderer {
             &params,
             &tris,
             &gbuffer.view,
-            &direct.output,
-            indirect,
+            (&direct.output, indirect),
             pixels,
+            c.aa > 1,
         );
         let resolve = (c.aa > 1).then(|| {
             Resolve::new(
                 &gpu,
                 &params,
-                (&compose.hdr, &direct.output, indirect),
+                (&compose.hdr, &direct.output, &compose.indirect_ss),
                 out_pixels,
             )
         });
@@ -601,15 +601,22 @@ impl Renderer {
         // ism_pullpush: ISM atlas -> hole-filled pyramid of the changed slots.
         self.ism.encode_pull_push(&mut rec.enc, changed_slots);
         rec.end_pass()?;
-        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light.
-        self.gather.encode(&mut rec.enc, gw, gh);
+        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light; supersampled, at
+        // one sample per pixel (tile 0 of the grid), the albedo left to compose.
+        let (iw, ih) = if c.aa > 1 {
+            (c.width, c.height)
+        } else {
+            (gw, gh)
+        };
+        self.gather.encode(&mut rec.enc, iw, ih);
         rec.end_pass()?;
         // interleave: G-buffer, triangles, subset sums -> filtered indirect light (N > 1).
         if let Some(f) = &self.interleave {
-            f.encode(&mut rec.enc, gw, gh);
+            f.encode(&mut rec.enc, iw, ih);
         }
         rec.end_pass()?;
-        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview.
+        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview
+        // (supersampled: each sub-sample's indirect light from its pixel's, no preview).
         self.compose.encode(&mut rec.enc, gw, gh);
         rec.end_pass()?;
         // resolve: sub-samples of the frame and its parts -> box-filtered pixels (aa > 1).
@@ -732,5 +739,60 @@ impl Renderer {
             profiling: self.profiling,
             reused: reuse,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(width: u32, height: u32, aa: u32) -> RendererConfig {
+        crate::config::Render {
+            sequence: crate::config::Sequence {
+                size: crate::config::Size { width, height },
+                ..Default::default()
+            },
+            quality: crate::config::Quality {
+                aa,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+        .renderer_config()
+    }
+
+    /// The supersampled buffers are checked against the adapter: a grid past its textures or
+    /// an HDR frame past its buffers is refused with the flags to change, before anything is
+    /// allocated.
+    #[test]
+    fn supersampled_sizes_are_checked_with_the_flags_named() {
+        let limits = wgpu::Limits::downlevel_defaults(); // 2048 texels, 128 MiB buffers
+        check_config(&config(1024, 1024, 2), &limits).unwrap();
+        let e = check_config(&config(1024, 1024, 3), &limits)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--aa 3") && e.contains("3072x3072") && e.contains("lower --aa or --size"),
+            "{e}"
+        );
+        // 2048^2 sub-samples of 16 bytes fit 128 MiB buffers exactly; a smaller limit refuses.
+        let small = wgpu::Limits {
+            max_storage_buffer_binding_size: 32 << 20,
+            ..limits.clone()
+        };
+        let e = check_config(&config(1024, 1024, 2), &small)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--aa 2") && e.contains("lower --size or --aa"),
+            "{e}"
+        );
+        check_config(&config(512, 512, 2), &small).unwrap();
+        for bad in [0, 9] {
+            let e = check_config(&config(64, 64, bad), &limits)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("--aa") && e.contains("1 to 8"), "{e}");
+        }
     }
 }

@@ -3,7 +3,7 @@
 //! of its sub-samples, for the HDR frame, its direct and indirect parts, and the 8-bit
 //! preview (see docs/antialiasing.md).
 
-use super::bindings::{bytes, read, read_write, uniform, Elem, Group, Pass};
+use super::bindings::{bytes, params, read, read_write, Elem, Group, Pass};
 use super::common::Params;
 use super::{Gpu, PixelPass};
 
@@ -13,7 +13,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            uniform("P", &Params::LAYOUT),
+            params("P", &Params::LAYOUT),
             read("hdr_in", Elem::Plain(16)),
             read("direct_in", Elem::Plain(16)),
             read("indirect_in", Elem::Plain(16)),
