@@ -2,7 +2,7 @@
 // (90 degree square frustum), storing the nearest element's index + 1 (0: nothing there, or
 // the back of an element).
 
-struct HemiFace {
+struct Face {
     pos: vec4f,   // the eye: an element's centre, lifted a hair along its normal
     right: vec4f, // right x up = fwd on every face, so windings agree across faces
     up: vec4f,
@@ -12,7 +12,7 @@ struct HemiFace {
     pad0: f32,
     pad1: f32,
 }
-@group(0) @binding(0) var<uniform> H: HemiFace;
+@group(0) @binding(0) var<uniform> H: Face;
 
 struct HemiOut {
     @builtin(position) clip: vec4f,

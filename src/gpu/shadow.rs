@@ -9,16 +9,17 @@ use glam::Vec3;
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
 gpu_struct! {
-    /// One hemicube face: the light sample, the face's axes, and the depth range.
-    struct Face {
-        pos: [f32; 4],
-        right: [f32; 4],
-        up: [f32; 4],
-        fwd: [f32; 4],
-        near: f32,
-        far: f32,
-        pad0: f32,
-        pad1: f32,
+    /// One hemicube face: the eye (a light sample, or for form factors an element's centre),
+    /// the face's axes, and the depth range. Shared with `radiosity::hemicube`.
+    pub(crate) struct Face {
+        pub(crate) pos: [f32; 4],
+        pub(crate) right: [f32; 4],
+        pub(crate) up: [f32; 4],
+        pub(crate) fwd: [f32; 4],
+        pub(crate) near: f32,
+        pub(crate) far: f32,
+        pub(crate) pad0: f32,
+        pub(crate) pad1: f32,
     }
 }
 
