@@ -1,8 +1,14 @@
 // Direct light: every pixel sums the stratified emitter samples, each with the visibility its
-// shadow hemicube gives.
-// Supersampled (P.aa = S > 1), the S^2 sub-samples of a pixel split the emitter samples:
-// the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that the
-// pixel's resolve holds every sample once at the cost of one sample point per pixel.
+// shadow hemicube gives. A sample's kind is in pos.w: 0 a point on an emitter triangle, 1 half
+// a point light (intensity into the hemisphere around normal), 2 a spot light (normal.w and
+// radiance.w: the cosines of its inner and outer cone), 3 a directional light (irradiance
+// along normal; pos the centre of its orthographic map, normal.w its half-width), 4 a point light
+// outside the geometry (intensity toward it, normal the axis of one shadow face zoomed to the
+// half-width normal.w at unit distance).
+// Supersampled (P.aa = S > 1) with at least S^2 samples, the S^2 sub-samples of a pixel split
+// them: the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that
+// the pixel's resolve holds every sample once at the cost of one sample point per pixel
+// (with fewer samples, as from a few punctual lights, every sub-sample sums them all).
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -46,28 +52,65 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let size = f32(p.shadow_size);
     var sum = vec3f(0.0);
     let s = max(p.aa, 1u);
-    for (var j = subsample_tile(gid.xy, vec2u(p.width, p.height), s); j < p.num_light_samples; j += s * s) {
+    let share = select(1u, s * s, p.num_light_samples >= s * s);
+    let first = select(0u, subsample_tile(gid.xy, vec2u(p.width, p.height), s), share > 1u);
+    for (var j = first; j < p.num_light_samples; j += share) {
         let ls = lights[j];
+        let kind = u32(ls.pos.w);
+        let ln = ls.normal.xyz;
+        if kind == 3u {
+            // Directional: irradiance times cos_x, visibility from the orthographic map.
+            let cos_x = -dot(n, ln);
+            if cos_x <= 0.0 {
+                continue;
+            }
+            let q = x - ls.pos.xyz;
+            let ext = ls.normal.w;
+            let uv = vec2f(dot(q, basis_t(ln)), dot(q, basis_b(ln))) / ext;
+            let texel = clamp(vec2i(floor(vec2f(uv.x * 0.5 + 0.5, 0.5 - 0.5 * uv.y) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
+            let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u), 0).x);
+            let bias = p.shadow_bias * ext * (2.0 / size) * (1.0 + slope(cos_x)) + p.near;
+            if stored > 0.0 && stored < dot(q, ln) - bias {
+                continue;
+            }
+            sum += ls.radiance.xyz * cos_x;
+            continue;
+        }
         let d = x - ls.pos.xyz;
         let d2 = dot(d, d);
         let dist = sqrt(d2);
         let w = d / dist;
-        let cos_l = dot(ls.normal.xyz, w);
+        let cos_l = dot(ln, w);
         let cos_x = -dot(n, w);
         if cos_l <= 0.0 || cos_x <= 0.0 {
             continue;
         }
-        let ln = ls.normal.xyz;
+        // How the sample's light falls off with the angle from its normal.
+        var f = cos_l;
+        if kind == 1u || kind == 4u {
+            f = 1.0;
+        } else if kind == 2u {
+            let a = clamp((cos_l - ls.radiance.w) / max(ls.normal.w - ls.radiance.w, 1e-3), 0.0, 1.0);
+            f = a * a;
+        }
+        if f <= 0.0 {
+            continue;
+        }
         let l = vec3f(dot(w, basis_t(ln)), dot(w, basis_b(ln)), cos_l);
-        let fc = face_coords(l);
+        var fc = face_coords(l);
+        var zoom = 1.0;
+        if kind == 4u {
+            zoom = 1.0 / ls.normal.w;
+            fc = vec4f(0.0, l.x / l.z * zoom, l.y / l.z * zoom, 0.0);
+        }
         let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
         let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u + u32(fc.x)), 0).x);
         let tan_x = slope(cos_x);
-        let bias = p.shadow_bias * dist * (2.0 / size) * (1.0 + tan_x) + p.near;
+        let bias = p.shadow_bias * dist * (2.0 / (size * zoom)) * (1.0 + tan_x) + p.near;
         if stored > 0.0 && stored < dist - bias {
             continue;
         }
-        sum += ls.radiance.xyz * (cos_l * cos_x / d2);
+        sum += ls.radiance.xyz * (f * cos_x / d2);
     }
-    direct[pix] = vec4f(sum * f32(s * s) * tri.albedo.xyz / PI, 1.0);
+    direct[pix] = vec4f(sum * f32(share) * tri.albedo.xyz / PI, 1.0);
 }

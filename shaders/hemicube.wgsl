@@ -9,7 +9,7 @@ struct Face {
     fwd: vec4f,
     near: f32,
     far: f32,
-    pad0: f32,
+    ortho: f32,   // 0 here: form-factor faces are perspective (see shadow.wgsl)
     pad1: f32,
 }
 @group(0) @binding(0) var<uniform> H: Face;

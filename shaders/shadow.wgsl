@@ -1,5 +1,7 @@
 // Shadow hemicube faces: the scene's triangles seen from one emitter sample along one face
-// axis (90 degree square frustum), storing the distance to the sample.
+// axis (90 degree square frustum), storing the distance to the sample; or, for a directional
+// light (ortho > 0), an orthographic map of half-width `ortho` along `fwd`, storing the depth
+// along `fwd` from `pos`.
 
 struct Face {
     pos: vec4f,   // the light sample
@@ -8,7 +10,7 @@ struct Face {
     fwd: vec4f,
     near: f32,
     far: f32,
-    pad0: f32,
+    ortho: f32,
     pad1: f32,
 }
 @group(0) @binding(0) var<uniform> F: Face;
@@ -25,7 +27,11 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
     let vy = dot(q, F.up.xyz);
     let vz = dot(q, F.fwd.xyz);
     var o: VsOut;
-    o.clip = vec4f(vx, vy, F.far * (vz - F.near) / (F.far - F.near), vz);
+    if F.ortho > 0.0 {
+        o.clip = vec4f(vx / F.ortho, vy / F.ortho, (vz - F.near) / (F.far - F.near), 1.0);
+    } else {
+        o.clip = vec4f(vx, vy, F.far * (vz - F.near) / (F.far - F.near), vz);
+    }
     o.q = q;
     return o;
 }
@@ -33,5 +39,6 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
 // Integer target (renderable everywhere): the distance's bits; 0 means nothing there.
 @fragment
 fn fs(i: VsOut) -> @location(0) vec4u {
-    return vec4u(bitcast<u32>(length(i.q)), 0u, 0u, 0u);
+    let d = select(length(i.q), dot(i.q, F.fwd.xyz), F.ortho > 0.0);
+    return vec4u(bitcast<u32>(d), 0u, 0u, 0u);
 }

@@ -1,9 +1,42 @@
 //! Direct-light pass (`shaders/direct.wgsl`): stratified emitter samples with shadow
-//! hemicube visibility. Its CPU twin is `reference::twin::direct`.
+//! hemicube visibility, and punctual lights: half a point light or a spot with a hemicube
+//! too, a directional light with an orthographic map (see `shadow`). Its CPU twin is
+//! `reference::twin::direct`.
 
 use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{LightSample, Params, Tri};
 use super::{Gpu, PixelPass};
+use crate::scene::{EmitterSample, SampleKind};
+
+/// A light sample's kind code in `pos.w` (as `shaders/direct.wgsl` reads it).
+pub const KIND_AREA: f32 = 0.0;
+pub const KIND_POINT_HALF: f32 = 1.0;
+pub const KIND_SPOT: f32 = 2.0;
+pub const KIND_DIRECTIONAL: f32 = 3.0;
+pub const KIND_POINT_CONE: f32 = 4.0;
+
+impl From<&EmitterSample> for LightSample {
+    /// Position, normal and radiance, with the kind in `pos.w` and its parameters in
+    /// `normal.w` and `radiance.w` (a spot's inner and outer cosines, a directional
+    /// light's map half-extent, a far point light's frustum half-width).
+    fn from(l: &EmitterSample) -> Self {
+        let (kind, a, b) = match l.kind {
+            SampleKind::Area => (KIND_AREA, 0.0, 0.0),
+            SampleKind::PointHalf => (KIND_POINT_HALF, 0.0, 0.0),
+            SampleKind::Spot {
+                cos_inner,
+                cos_outer,
+            } => (KIND_SPOT, cos_inner, cos_outer),
+            SampleKind::Directional { extent } => (KIND_DIRECTIONAL, extent, 0.0),
+            SampleKind::PointCone { tan_half } => (KIND_POINT_CONE, tan_half, 0.0),
+        };
+        LightSample {
+            pos: l.position.extend(kind).to_array(),
+            normal: l.normal.extend(a).to_array(),
+            radiance: l.radiance.extend(b).to_array(),
+        }
+    }
+}
 
 pub(crate) const PASS: Pass = Pass {
     name: "direct",

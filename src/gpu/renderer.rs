@@ -486,15 +486,7 @@ impl Renderer {
     /// Uploads the emitter samples unless they are the same as last frame's; returns
     /// whether they were kept.
     fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
-        let v4 = |v: Vec3| v.extend(0.0).to_array();
-        let lights: Vec<LightSample> = samples
-            .iter()
-            .map(|l| LightSample {
-                pos: v4(l.position),
-                normal: v4(l.normal),
-                radiance: v4(l.radiance),
-            })
-            .collect();
+        let lights: Vec<LightSample> = samples.iter().map(LightSample::from).collect();
         let kept = self.reuse && same(&self.last.lights, &lights);
         if !lights.is_empty() && !kept {
             self.gpu
@@ -576,15 +568,10 @@ impl Renderer {
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
         rec.end_pass()?;
         // shadow_maps: vertices, emitter samples -> hemicube distances (kept while still).
-        let samples: Vec<(Vec3, Vec3)> = input
-            .lights
-            .iter()
-            .map(|l| (l.position, l.normal))
-            .collect();
         let drawn = self.shadows.encode(
             &self.gpu,
             &mut rec.enc,
-            &samples,
+            input.lights,
             (near, far),
             &self.vertices,
             count,
@@ -624,7 +611,7 @@ impl Renderer {
             r.encode(&mut rec.enc, c.width, c.height);
         }
         rec.end_pass()?;
-        Ok(!drawn && !samples.is_empty())
+        Ok(!drawn && !input.lights.is_empty())
     }
 
     /// Copies the outputs into the staging buffers in the frame's submission, submits, and

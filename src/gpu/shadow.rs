@@ -1,9 +1,14 @@
 //! Shadow hemicubes (`shaders/shadow.wgsl`): for every emitter sample, five 90-degree faces
 //! (+n, +t, -t, +b, -b) rasterized from the triangles, storing distance to the sample. These
-//! are the accurate shadow maps of the direct light.
+//! are the accurate shadow maps of the direct light. A point light is two samples (two
+//! hemicubes, back to back), or, when it lies well outside the geometry, one face zoomed to
+//! the frustum that holds the geometry; a spot light is one, drawing only its front face when its cone
+//! fits it (within 45 degrees); a directional light draws one orthographic map along its
+//! direction over the square that covers the geometry, storing depth along the direction.
 
 use super::bindings::{dynamic_uniform, gpu_struct, Group, Pass};
 use super::{gbuffer, Gpu};
+use crate::scene::{EmitterSample, SampleKind};
 use glam::Vec3;
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -18,7 +23,8 @@ gpu_struct! {
         pub(crate) fwd: [f32; 4],
         pub(crate) near: f32,
         pub(crate) far: f32,
-        pub(crate) pad0: f32,
+        /// Half the width of an orthographic map (0: a perspective face).
+        pub(crate) ortho: f32,
         pub(crate) pad1: f32,
     }
 }
@@ -27,7 +33,7 @@ pub(crate) const PASS: Pass = Pass {
     name: "shadow",
     wgsl: include_str!("../../shaders/shadow.wgsl"),
     groups: &[Group {
-        stages: wgpu::ShaderStages::VERTEX,
+        stages: wgpu::ShaderStages::VERTEX_FRAGMENT,
         bindings: &[dynamic_uniform("F", &Face::LAYOUT)],
     }],
 };
@@ -110,7 +116,8 @@ impl ShadowMaps {
         }
     }
 
-    /// Renders the hemicubes of `samples` (position, normal) with depth range `(near, far)`,
+    /// Renders the shadow maps of `samples` (the faces [`EmitterSample::faces`] says, face
+    /// `k` of sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
     /// unless they are the ones last drawn and the geometry did not move. Returns whether it
     /// drew.
     #[allow(clippy::too_many_arguments)]
@@ -118,35 +125,48 @@ impl ShadowMaps {
         &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
-        samples: &[(Vec3, Vec3)],
+        samples: &[EmitterSample],
         (near, far): (f32, f32),
         vertices: &wgpu::Buffer,
         count: u32,
         geometry_moved: bool,
     ) -> bool {
         let mut bytes = vec![0u8; (self.stride as usize) * samples.len() * 5];
-        for (j, &(p, n)) in samples.iter().enumerate() {
-            for (k, (r, u, f)) in face_bases(n).into_iter().enumerate() {
+        let mut layers = Vec::new();
+        for (j, s) in samples.iter().enumerate() {
+            // A punctual light may lie far outside the geometry: its maps reach past it.
+            let (near, far, ortho) = match s.kind {
+                SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
+                _ => (near, far.max(s.reach * 1.01), 0.0),
+            };
+            // A far point light's one face is zoomed to its frustum by shortening the axes.
+            let zoom = match s.kind {
+                SampleKind::PointCone { tan_half } => 1.0 / tan_half,
+                _ => 1.0,
+            };
+            for (k, (r, u, f)) in face_bases(s.normal).into_iter().take(s.faces()).enumerate() {
+                let (r, u) = (r * zoom, u * zoom);
                 let face = Face {
-                    pos: p.extend(1.0).to_array(),
+                    pos: s.position.extend(1.0).to_array(),
                     right: r.extend(0.0).to_array(),
                     up: u.extend(0.0).to_array(),
                     fwd: f.extend(0.0).to_array(),
                     near,
                     far,
-                    pad0: 0.0,
+                    ortho,
                     pad1: 0.0,
                 };
                 let o = (j * 5 + k) * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Face>()]
                     .copy_from_slice(bytemuck::bytes_of(&face));
+                layers.push(j * 5 + k);
             }
         }
         if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
             return false;
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
-        for l in 0..samples.len() * 5 {
+        for l in layers {
             gbuffer::raster(
                 enc,
                 "shadow face",

@@ -46,15 +46,10 @@ impl Shaded {
 pub fn direct_at(tracer: &Tracer, lights: &[EmitterSample], x: Vec3, n: Vec3, rho: Vec3) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for l in lights {
-        let w = l.position - x;
-        let d2 = w.length_squared();
-        if d2 <= 0.0 {
-            continue;
-        }
-        let wn = w / d2.sqrt();
-        let (cx, cl) = (n.dot(wn), -l.normal.dot(wn));
-        if cx > 0.0 && cl > 0.0 && !tracer.occluded(x, n, l.position, l.normal) {
-            sum += l.radiance * (cx * cl / d2);
+        if let Some((e, y, ny)) = l.irradiance_at(x, n) {
+            if !tracer.occluded(x, n, y, ny) {
+                sum += e;
+            }
         }
     }
     rho / PI * sum

@@ -243,7 +243,7 @@ impl Hemicube {
                 fwd: fwd.extend(0.0).to_array(),
                 near: self.far * 1e-6,
                 far: self.far,
-                pad0: 0.0,
+                ortho: 0.0,
                 pad1: 0.0,
             };
             let o = k * self.stride as usize;

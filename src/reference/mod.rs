@@ -1,5 +1,8 @@
 //! The reference: a CPU path tracer with next-event estimation and multiple importance
-//! sampling (power heuristic) on the emitters, Russian roulette, rayon across rows.
+//! sampling (power heuristic) on the emitter triangles, next-event estimation alone on the
+//! punctual lights (all of them at each vertex, or one picked by power when there are many: a
+//! delta light cannot be hit by a scattered ray, so it needs no MIS weight), Russian roulette,
+//! rayon across rows.
 //! It is the ground truth every metric is held to.
 
 pub mod twin;
@@ -12,6 +15,9 @@ use glam::{Vec2, Vec3};
 use rand::Rng;
 use rayon::prelude::*;
 use std::f32::consts::PI;
+
+/// Up to this many punctual lights, every path vertex takes all of them (a shadow ray each).
+const ALL_LIGHTS: usize = 8;
 
 /// Parameters of one reference image.
 #[derive(Clone, Copy, Debug)]
@@ -100,6 +106,18 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
                 let mis = pl * pl / (pl * pl + pb * pb);
                 l += beta * rho / PI * frame.emission(lt) * (cos_x / pl * mis);
             }
+        }
+        // Next-event estimation on the punctual lights: each of them when there are at most
+        // ALL_LIGHTS, else one chosen by power (weight 1 / p).
+        let punctual = |i: usize, w: f32| match em.lights[i].irradiance_at(x, n, em.far()) {
+            Some((e, y)) if !tracer.occluded(x, n, y, Vec3::ZERO) => beta * rho / PI * e * w,
+            _ => Vec3::ZERO,
+        };
+        if em.lights.len() <= ALL_LIGHTS {
+            l += (0..em.lights.len()).map(|i| punctual(i, 1.0)).sum::<Vec3>();
+        } else {
+            let (i, p) = em.pick_light(r.random());
+            l += punctual(i, 1.0 / p);
         }
         // Continue by cosine sampling: f cos / pdf = rho.
         d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));

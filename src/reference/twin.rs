@@ -99,18 +99,9 @@ pub fn direct(
         let rho = frame.albedo(s.tri as usize);
         samples
             .iter()
-            .map(|l| {
-                let d = s.x - l.position;
-                let d2 = d.length_squared();
-                let w = d / d2.sqrt();
-                let cos_l = l.normal.dot(w);
-                let cos_x = -s.n.dot(w);
-                if cos_l <= 0.0 || cos_x <= 0.0 || tracer.occluded(s.x, s.n, l.position, l.normal) {
-                    Vec3::ZERO
-                } else {
-                    l.radiance * rho / PI * (cos_l * cos_x / d2)
-                }
-            })
+            .filter_map(|l| l.irradiance_at(s.x, s.n))
+            .filter(|&(_, y, ny)| !tracer.occluded(s.x, s.n, y, ny))
+            .map(|(e, _, _)| e * rho / PI)
             .sum()
     })
 }

@@ -25,7 +25,7 @@ struct Lit {
 pub fn lit_camera(frame: &Frame) -> Camera {
     let (lo, hi) = frame.bounds();
     let fallback = Camera::framing(lo, hi);
-    if frame.tris.is_empty() || frame.emitters.tris.is_empty() {
+    if frame.tris.is_empty() || frame.emitters.is_empty() {
         return fallback;
     }
     let tracer = Tracer::new(frame);
@@ -99,15 +99,13 @@ fn lit_points(frame: &Frame, tracer: &Tracer) -> Vec<Lit> {
 fn irradiance(n: Vec3, x: Vec3, samples: &[super::EmitterSample], tracer: &Tracer) -> Option<Lit> {
     let mut side = [0.0f32; 2];
     for s in samples {
-        let w = s.position - x;
-        let d2 = w.length_squared();
-        let cos_l = -s.normal.dot(w) / d2.sqrt();
-        let cos_x = n.dot(w) / d2.sqrt();
-        if cos_l <= 0.0 || d2 <= 0.0 || tracer.occluded(x, n, s.position, s.normal) {
-            continue;
+        for (k, nk) in [n, -n].into_iter().enumerate() {
+            if let Some((e, y, ny)) = s.irradiance_at(x, nk) {
+                if !tracer.occluded(x, nk, y, ny) {
+                    side[k] += crate::math::luminance(e);
+                }
+            }
         }
-        let e = crate::math::luminance(s.radiance) * cos_l * cos_x.abs() / d2;
-        side[(cos_x < 0.0) as usize] += e;
     }
     let (e, n) = if side[0] >= side[1] {
         (side[0], n)

@@ -1,7 +1,7 @@
-//! What a scene holds, for `irad scenes FILE`: triangles, emitters and their power, cameras,
-//! animations, bounds and the loader's warnings.
+//! What a scene holds, for `irad scenes FILE`: triangles, emitters and punctual lights and
+//! their power, cameras, animations, bounds and the loader's warnings.
 
-use super::{Camera, Scene};
+use super::{Camera, LightKind, Scene};
 use glam::Vec3;
 use std::fmt;
 
@@ -11,6 +11,19 @@ pub struct EmitterInfo {
     pub material: String,
     pub triangles: usize,
     /// RGB power in watts (`Le * pi * area`, summed).
+    pub power: Vec3,
+}
+
+/// One punctual light placed at t = 0.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightInfo {
+    pub name: String,
+    pub kind: LightKind,
+    pub position: Vec3,
+    pub direction: Vec3,
+    /// W/sr (point, spot) or W/m^2 (directional), RGB.
+    pub intensity: Vec3,
+    /// RGB watts (a directional light's through the sphere around the geometry).
     pub power: Vec3,
 }
 
@@ -32,6 +45,7 @@ pub struct Inspection {
     /// Triangles at t = 0.
     pub triangles: usize,
     pub emitters: Vec<EmitterInfo>,
+    pub lights: Vec<LightInfo>,
     pub cameras: Vec<CameraInfo>,
     /// The camera irad renders from at t = 0.
     pub camera: Camera,
@@ -61,6 +75,19 @@ pub fn inspect(scene: &Scene) -> Inspection {
             }),
         }
     }
+    let lights = f
+        .emitters
+        .lights
+        .iter()
+        .map(|l| LightInfo {
+            name: scene.lights[l.light].name.clone(),
+            kind: l.kind,
+            position: l.position,
+            direction: l.direction,
+            intensity: l.intensity,
+            power: l.power,
+        })
+        .collect();
     let cameras = (0..scene.nodes.len())
         .filter_map(|i| {
             let c = scene.nodes[i].camera?;
@@ -76,6 +103,7 @@ pub fn inspect(scene: &Scene) -> Inspection {
         name: scene.name.clone(),
         triangles: f.tris.len(),
         emitters,
+        lights,
         cameras,
         camera: f.camera,
         channels: scene.channels.len(),
@@ -99,6 +127,35 @@ impl fmt::Display for Inspection {
                 e.material,
                 e.triangles,
                 v(e.power)
+            )?;
+        }
+        for l in &self.lights {
+            let (what, unit) = match l.kind {
+                LightKind::Point => ("point".to_string(), "W/sr"),
+                LightKind::Spot {
+                    cos_inner,
+                    cos_outer,
+                } => (
+                    format!(
+                        "spot (cone {:.1} to {:.1} deg)",
+                        cos_inner.acos().to_degrees(),
+                        cos_outer.acos().to_degrees()
+                    ),
+                    "W/sr",
+                ),
+                LightKind::Directional => ("directional".to_string(), "W/m^2"),
+            };
+            let place = match l.kind {
+                LightKind::Point => format!("at {}", v(l.position)),
+                LightKind::Spot { .. } => format!("at {} toward {}", v(l.position), v(l.direction)),
+                LightKind::Directional => format!("toward {}", v(l.direction)),
+            };
+            writeln!(
+                w,
+                "  light       '{}': {what} {place}, intensity {} {unit}, power {} W",
+                l.name,
+                v(l.intensity),
+                v(l.power)
             )?;
         }
         for c in &self.cameras {

@@ -7,6 +7,7 @@ pub mod builtin;
 pub mod camera;
 pub mod framing;
 pub mod inspect;
+pub mod lights;
 pub mod load;
 
 use glam::{Mat4, Quat, Vec3};
@@ -14,6 +15,7 @@ use std::sync::Arc;
 
 pub use anim::{Channel, Interpolation, Property};
 pub use camera::Camera;
+pub use lights::{LightDef, LightKind, PunctualLight};
 
 /// A Lambertian material: albedo `rho` and emitted radiance `Le` (front face only, unless
 /// `double_sided`: then [`Scene::at`] adds a back-facing twin of each emitting triangle).
@@ -72,6 +74,8 @@ pub struct Node {
     pub children: Vec<usize>,
     pub mesh: Option<usize>,
     pub camera: Option<CameraDef>,
+    /// A KHR_lights_punctual light (index into [`Scene::lights`]).
+    pub light: Option<usize>,
 }
 
 /// A scene as loaded: static description plus animation channels.
@@ -83,6 +87,8 @@ pub struct Scene {
     pub meshes: Vec<Vec<Primitive>>,
     pub nodes: Vec<Node>,
     pub roots: Vec<usize>,
+    /// The file's punctual lights, placed by the nodes that refer to them.
+    pub lights: Vec<LightDef>,
     /// The node carrying the camera in use, if the file has one.
     pub camera_node: Option<usize>,
     /// A framing camera used when the file has none.
@@ -95,7 +101,8 @@ pub struct Scene {
     pub shift: Vec3,
 }
 
-/// Emissive triangles of a frame, with a CDF for choosing one in proportion to power.
+/// What lights a frame: emissive triangles, with a CDF for choosing one in proportion to
+/// power, and punctual lights, with their own.
 #[derive(Clone, Debug, Default)]
 pub struct Emitters {
     /// Triangle indices into the frame.
@@ -104,8 +111,17 @@ pub struct Emitters {
     pub power: Vec<Vec3>,
     /// Cumulative luminance power, normalized to end at 1.
     pub cdf: Vec<f32>,
-    /// Total RGB power of all emitters.
+    /// Total RGB power of all emitter triangles.
     pub total_power: Vec3,
+    /// The punctual lights that shine at this time.
+    pub lights: Vec<PunctualLight>,
+    /// Cumulative luminance power of the punctual lights, normalized to end at 1.
+    pub light_cdf: Vec<f32>,
+    /// Total RGB power of the punctual lights.
+    pub light_power: Vec3,
+    /// The sphere around the frame's geometry (centre, radius): where a directional light's
+    /// light comes in through.
+    pub sphere: (Vec3, f32),
 }
 
 impl Emitters {
@@ -122,6 +138,40 @@ impl Emitters {
     pub fn prob(&self, i: usize) -> f32 {
         let prev = if i == 0 { 0.0 } else { self.cdf[i - 1] };
         self.cdf[i] - prev
+    }
+
+    /// Picks a punctual light by a uniform number, in proportion to power: (index into
+    /// `lights`, probability).
+    pub fn pick_light(&self, u: f32) -> (usize, f32) {
+        let c = &self.light_cdf;
+        let i = c.partition_point(|&x| x <= u).min(c.len() - 1);
+        (i, c[i] - if i == 0 { 0.0 } else { c[i - 1] })
+    }
+
+    /// Whether anything lights the frame.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty() && self.lights.is_empty()
+    }
+
+    /// The probability that a light path starts on an emitter triangle rather than at a
+    /// punctual light: their shares of the luminance power (1 without punctual lights).
+    pub fn area_share(&self) -> f32 {
+        if self.lights.is_empty() {
+            return 1.0;
+        }
+        let a = crate::math::luminance(self.total_power);
+        let l = crate::math::luminance(self.light_power);
+        if self.tris.is_empty() || a + l <= 0.0 {
+            0.0
+        } else {
+            a / (a + l)
+        }
+    }
+
+    /// How far back along a directional light's direction a point's visibility is tested:
+    /// past the sphere around the geometry from anywhere inside it.
+    pub fn far(&self) -> f32 {
+        4.0 * self.sphere.1.max(1e-3)
     }
 }
 
@@ -316,6 +366,55 @@ impl Scene {
         }
     }
 
+    /// The punctual lights of the nodes under the roots, placed by their world matrices
+    /// (depth-first node order). A light scaled to nothing (no direction) or without power at
+    /// this time is left out. Directions are the transformed -Z axes, so a mirroring node
+    /// mirrors where its lights point along with its geometry.
+    fn place_lights(&self, world: &[Mat4], em: &mut Emitters) {
+        if self.lights.is_empty() {
+            return;
+        }
+        let r = em.sphere.1;
+        let mut acc = 0.0f32;
+        let mut stack: Vec<usize> = self.roots.iter().rev().copied().collect();
+        while let Some(n) = stack.pop() {
+            stack.extend(self.nodes[n].children.iter().rev());
+            let Some((light, def)) = self.nodes[n]
+                .light
+                .and_then(|l| Some((l, self.lights.get(l)?)))
+            else {
+                continue;
+            };
+            let m = world[n];
+            let position = m.transform_point3(Vec3::ZERO);
+            let direction = m.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+            let power = match def.kind {
+                LightKind::Directional => def.intensity * (std::f32::consts::PI * r * r),
+                kind => def.intensity * kind.solid_angle(),
+            };
+            let lum = crate::math::luminance(power);
+            let placed =
+                position.is_finite() && (def.kind == LightKind::Point || direction != Vec3::ZERO);
+            if !(placed && lum > 0.0 && lum.is_finite()) {
+                continue;
+            }
+            em.lights.push(PunctualLight {
+                light,
+                kind: def.kind,
+                position,
+                direction,
+                intensity: def.intensity,
+                power,
+            });
+            em.light_power += power;
+            acc += lum;
+            em.light_cdf.push(acc);
+        }
+        for c in &mut em.light_cdf {
+            *c /= acc;
+        }
+    }
+
     /// Evaluates the scene at time `t` (seconds).
     pub fn at(&self, t: f32) -> Frame {
         let world = self.world_matrices(t);
@@ -345,6 +444,13 @@ impl Scene {
         for c in &mut emitters.cdf {
             *c /= acc;
         }
+        let (lo, hi) = bounds(tris.iter().flatten().copied());
+        emitters.sphere = if tris.is_empty() {
+            (Vec3::ZERO, 1.0)
+        } else {
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
+        };
+        self.place_lights(&world, &mut emitters);
         let camera = match self.camera_node {
             Some(n) => Camera::from_world(world[n], self.nodes[n].camera.map_or(0.7, |c| c.yfov)),
             None => self.default_camera,
@@ -369,36 +475,243 @@ impl Scene {
 
 /// A point sample on the emitters for direct light: position, unit normal (the emitting
 /// side) and `Le / (pdf_area * count)`, so that direct radiance at x is the sum over samples of
-/// `rho_x/pi * radiance * cos_l cos_x / d^2 * V`.
+/// `rho_x/pi * radiance * cos_l cos_x / d^2 * V`; or a punctual light (see [`SampleKind`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmitterSample {
     pub position: Vec3,
     pub normal: Vec3,
     pub radiance: Vec3,
+    pub kind: SampleKind,
+    /// For a punctual light, the farthest the geometry can be from it (its distance to the
+    /// sphere around the geometry, far side), so that its shadow maps reach that far; 0 for
+    /// points on emitter triangles (which lie within the geometry).
+    pub reach: f32,
+}
+
+/// What an [`EmitterSample`] stands for, and so how its light reaches a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SampleKind {
+    /// A point on an emitter triangle, as above.
+    Area,
+    /// Half a point light: its intensity `radiance` (W/sr, over the light's pick
+    /// probability) into the hemisphere around `normal`; a point light is two samples, one
+    /// around `normal` and one around `-normal`.
+    PointHalf,
+    /// A spot light: intensity `radiance` (W/sr) along the axis `normal`, with glTF's cone
+    /// falloff between the two cosines.
+    Spot { cos_inner: f32, cos_outer: f32 },
+    /// A point light outside the geometry: its intensity `radiance` (W/sr) toward the
+    /// geometry, which lies within the square frustum about `normal` whose half-width is
+    /// `tan_half` (< 1) at unit distance: one shadow face, zoomed to that frustum.
+    PointCone { tan_half: f32 },
+    /// A directional light: irradiance `radiance` (W/m^2) travelling along `normal`.
+    /// `position` is the centre of a square `2 extent` wide facing it behind the geometry
+    /// (its shadow map's).
+    Directional { extent: f32 },
+}
+
+impl EmitterSample {
+    /// The irradiance this sample gives at `x` on a surface with unit normal `n`, without
+    /// visibility (direct radiance is `rho/pi` times the sum of these over the samples that
+    /// see `x`), with the point and normal whose visibility from `x` counts. None: no light.
+    pub fn irradiance_at(&self, x: Vec3, n: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
+        if let SampleKind::Directional { .. } = self.kind {
+            let cos_x = -n.dot(self.normal);
+            let back = x - self.normal * self.normal.dot(x - self.position);
+            return (cos_x > 0.0).then(|| (self.radiance * cos_x, back, Vec3::ZERO));
+        }
+        let d = x - self.position;
+        let d2 = d.length_squared();
+        if d2 <= 0.0 {
+            return None;
+        }
+        let w = d / d2.sqrt();
+        let cos_l = self.normal.dot(w);
+        let cos_x = -n.dot(w);
+        if cos_l <= 0.0 || cos_x <= 0.0 {
+            return None;
+        }
+        let (f, nl) = match self.kind {
+            SampleKind::Area => (cos_l, self.normal),
+            SampleKind::PointHalf | SampleKind::PointCone { .. } => (1.0, Vec3::ZERO),
+            SampleKind::Spot {
+                cos_inner,
+                cos_outer,
+            } => (
+                LightKind::Spot {
+                    cos_inner,
+                    cos_outer,
+                }
+                .falloff(cos_l),
+                Vec3::ZERO,
+            ),
+            SampleKind::Directional { .. } => unreachable!(),
+        };
+        (f > 0.0).then(|| (self.radiance * (f * cos_x / d2), self.position, nl))
+    }
+
+    /// Shadow-map faces this sample needs (of a hemicube's five; they come first): one
+    /// for a directional light and for a spot whose cone fits the front face, else five.
+    pub fn faces(&self) -> usize {
+        match self.kind {
+            SampleKind::Directional { .. } | SampleKind::PointCone { .. } => 1,
+            // The front face holds every direction within 45 degrees of the axis.
+            SampleKind::Spot { cos_outer, .. } if cos_outer >= std::f32::consts::FRAC_1_SQRT_2 => 1,
+            _ => 5,
+        }
+    }
 }
 
 impl Frame {
-    /// `count` emitter samples, stratified over the power CDF, from a stream that depends on
+    /// `count` emitter samples: the punctual lights first (each exactly, a point light as two
+    /// samples, or one when it lies well outside the geometry, while they fit in `count` and leave one sample for the emitter triangles if
+    /// there are any; else a stratified draw by power, weighted by its probability), then
+    /// samples of the emitter triangles, stratified over the power CDF. The streams depend on
     /// the seed only (so a still scene's direct light does not change from frame to frame).
     pub fn emitter_samples(&self, seed: u64, count: usize) -> Vec<EmitterSample> {
         use rand::Rng;
         let em = &self.emitters;
-        if em.tris.is_empty() {
-            return Vec::new();
+        let mut out = self.punctual_samples(seed, count);
+        let count = count - out.len();
+        if em.tris.is_empty() || count == 0 {
+            return out;
         }
         let mut r = crate::math::rng(&[seed, 0xd1ec7]);
-        (0..count)
-            .map(|j| {
-                let u = ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7);
-                let (e, p_e) = em.pick(u);
-                let tri = em.tris[e] as usize;
-                let b = crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
-                EmitterSample {
-                    position: self.point(tri, b.x, b.y),
-                    normal: self.normals[tri],
-                    radiance: self.emission(tri) * (self.areas[tri] / (p_e * count as f32)),
+        out.extend((0..count).map(|j| {
+            let u = ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7);
+            let (e, p_e) = em.pick(u);
+            let tri = em.tris[e] as usize;
+            let b = crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
+            EmitterSample {
+                position: self.point(tri, b.x, b.y),
+                normal: self.normals[tri],
+                radiance: self.emission(tri) * (self.areas[tri] / (p_e * count as f32)),
+                kind: SampleKind::Area,
+                reach: 0.0,
+            }
+        }));
+        out
+    }
+
+    /// The punctual lights' samples of [`Frame::emitter_samples`] (at most `count`).
+    fn punctual_samples(&self, seed: u64, count: usize) -> Vec<EmitterSample> {
+        use rand::Rng;
+        let em = &self.emitters;
+        if em.lights.is_empty() || count == 0 {
+            return Vec::new();
+        }
+        let slots = |l: &PunctualLight| {
+            if l.kind == LightKind::Point && self.cone_of(l).is_none() {
+                2
+            } else {
+                1
+            }
+        };
+        let needed: usize = em.lights.iter().map(slots).sum();
+        let has_area = !em.tris.is_empty();
+        let mut out = Vec::new();
+        if needed + has_area as usize <= count {
+            for l in &em.lights {
+                self.push_light(&mut out, l, 1.0, None);
+            }
+            return out;
+        }
+        // Too many lights: `k` stratified picks by power; each fits in two slots.
+        let share = 1.0 - em.area_share();
+        let budget = ((count as f32 * share).round() as usize).clamp(1, count - has_area as usize);
+        let k = (budget / 2).max(1);
+        let mut r = crate::math::rng(&[seed, 0x9c7a1]);
+        for j in 0..k {
+            let u = ((j as f32 + r.random::<f32>()) / k as f32).min(1.0 - 1e-7);
+            let (i, p) = em.pick_light(u);
+            // With one slot, a point light gives one random half, twice as bright.
+            let half = (budget == 1).then(|| r.random::<bool>());
+            self.push_light(&mut out, &em.lights[i], 1.0 / (p * k as f32), half);
+        }
+        out
+    }
+
+    /// For a point light outside the sphere around the geometry, far enough that the sphere
+    /// fits a square frustum narrower than 90 degrees: the frustum's axis (toward the centre)
+    /// and half-width at unit distance (1% wider than the sphere's cone).
+    fn cone_of(&self, l: &PunctualLight) -> Option<(Vec3, f32)> {
+        let (c, r) = self.emitters.sphere;
+        let d = (c - l.position).length();
+        let sin = r / d;
+        (d.is_finite() && sin < 0.69).then(|| {
+            let tan = sin / (1.0 - sin * sin).sqrt();
+            ((c - l.position) / d, tan * 1.01)
+        })
+    }
+
+    /// The sample(s) of one punctual light, scaled by `weight`; `half`: only one half of a
+    /// point light (which, doubled).
+    fn push_light(
+        &self,
+        out: &mut Vec<EmitterSample>,
+        l: &PunctualLight,
+        weight: f32,
+        half: Option<bool>,
+    ) {
+        let radiance = l.intensity * weight;
+        let (c, r) = self.emitters.sphere;
+        let reach = (l.position - c).length() + r;
+        match l.kind {
+            LightKind::Point if half.is_none() && self.cone_of(l).is_some() => {
+                let (axis, tan_half) = self.cone_of(l).unwrap();
+                out.push(EmitterSample {
+                    position: l.position,
+                    normal: axis,
+                    radiance,
+                    kind: SampleKind::PointCone { tan_half },
+                    reach,
+                });
+            }
+            LightKind::Point => {
+                let axis = if l.direction == Vec3::ZERO {
+                    Vec3::Y
+                } else {
+                    l.direction
+                };
+                let sides: &[f32] = match half {
+                    None => &[1.0, -1.0],
+                    Some(true) => &[1.0],
+                    Some(false) => &[-1.0],
+                };
+                let scale = if half.is_some() { 2.0 } else { 1.0 };
+                for &s in sides {
+                    out.push(EmitterSample {
+                        position: l.position,
+                        normal: axis * s,
+                        radiance: radiance * scale,
+                        kind: SampleKind::PointHalf,
+                        reach,
+                    });
                 }
-            })
-            .collect()
+            }
+            LightKind::Spot {
+                cos_inner,
+                cos_outer,
+            } => out.push(EmitterSample {
+                position: l.position,
+                normal: l.direction,
+                radiance,
+                kind: SampleKind::Spot {
+                    cos_inner,
+                    cos_outer,
+                },
+                reach,
+            }),
+            LightKind::Directional => {
+                let extent = r * 1.01;
+                out.push(EmitterSample {
+                    position: c - l.direction * extent,
+                    normal: l.direction,
+                    radiance,
+                    kind: SampleKind::Directional { extent },
+                    reach: 2.0 * extent,
+                });
+            }
+        }
     }
 }

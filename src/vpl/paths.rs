@@ -1,16 +1,22 @@
 //! Light paths: an emitter point chosen in proportion to power, a cosine-weighted direction,
 //! and Russian roulette on albedo at every bounce. Each vertex after the emitter is a VPL.
+//! A path starts on an emitter triangle or at a punctual light in proportion to their
+//! luminance power: a point light sends it in a uniform direction, a spot light in a
+//! uniform direction within its outer cone (weighted by the falloff), a directional light
+//! along its direction from a uniform point of the disk that covers the sphere around the
+//! geometry, behind it.
 //!
 //! A path is a pure function of (seed, path id, the frame's scene): its random numbers come
 //! from a stream seeded by (seed, path id) alone, so a path kept by a sampler can be traced
 //! again in the next frame and lands where the moved scene sends it.
 
-use crate::math::{cosine_hemisphere, rng, triangle_barycentrics};
-use crate::scene::Frame;
+use crate::math::{basis, cosine_hemisphere, rng, triangle_barycentrics};
+use crate::scene::{Frame, LightKind, PunctualLight};
 use crate::trace::Tracer;
 use glam::{Vec2, Vec3};
 use rand::Rng;
 use rayon::prelude::*;
+use std::f32::consts::PI;
 
 /// Paths stop after this many bounces whatever Russian roulette says.
 pub const MAX_DEPTH: u32 = 16;
@@ -35,25 +41,37 @@ pub struct Vpl {
 pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<Vpl> {
     let mut out = Vec::new();
     let em = &frame.emitters;
-    if em.tris.is_empty() {
+    if em.is_empty() {
         return out;
     }
     let mut r = rng(&[seed, path, 0x11a7]);
-    let (e, p_e) = em.pick(r.random());
-    let tri = em.tris[e] as usize;
-    let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
-    let n = frame.normals[tri];
-    let mut x = frame.point(tri, b.x, b.y);
-    let mut dir = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
-    // Le * cos / (p_e / A * cos / pi)
-    let mut power = frame.emission(tri) * (std::f32::consts::PI * frame.areas[tri] / p_e);
-    let mut origin = tracer.offset(x, n, dir);
+    let u: f32 = r.random();
+    let share = em.area_share();
+    let (mut origin, mut dir, mut power) = if u < share {
+        let (e, p_e) = em.pick(u / share);
+        let tri = em.tris[e] as usize;
+        let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
+        let n = frame.normals[tri];
+        let x = frame.point(tri, b.x, b.y);
+        let dir = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
+        // Le * cos / (p_e / A * cos / pi)
+        let power = frame.emission(tri) * (std::f32::consts::PI * frame.areas[tri] / (p_e * share));
+        (tracer.offset(x, n, dir), dir, power)
+    } else {
+        let v = ((u - share) / (1.0 - share)).min(1.0 - 1e-7);
+        let (i, p) = em.pick_light(v);
+        let (o, d, power) = emit(&em.lights[i], em.sphere, &mut r);
+        (o, d, power / (p * (1.0 - share)))
+    };
+    if power == Vec3::ZERO {
+        return out;
+    }
     for depth in 1..=MAX_DEPTH {
         let Some(h) = tracer.intersect(origin, dir, f32::INFINITY) else {
             break;
         };
         let tri = h.tri as usize;
-        x = frame.point(tri, h.b1, h.b2);
+        let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo(tri);
@@ -76,6 +94,40 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         origin = tracer.offset(x, nf, dir);
     }
     out
+}
+
+/// Where a light path leaves punctual light `l`, its direction, and its power over the
+/// density of that choice: `I f(cos) / pdf(direction)` for point and spot lights,
+/// `E / pdf(point on the disk)` for a directional light.
+fn emit(l: &PunctualLight, (c, radius): (Vec3, f32), r: &mut impl Rng) -> (Vec3, Vec3, Vec3) {
+    let (u1, u2): (f32, f32) = (r.random(), r.random());
+    let phi = 2.0 * PI * u2;
+    match l.kind {
+        LightKind::Point => {
+            let z = 1.0 - 2.0 * u1;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let d = Vec3::new(s * phi.cos(), s * phi.sin(), z);
+            (l.position, d, l.intensity * (4.0 * PI))
+        }
+        LightKind::Spot { cos_outer, .. } => {
+            let z = 1.0 - u1 * (1.0 - cos_outer);
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let (t, b) = basis(l.direction);
+            let d = (t * (s * phi.cos()) + b * (s * phi.sin()) + l.direction * z).normalize();
+            let f = l.kind.falloff(z);
+            (
+                l.position,
+                d,
+                l.intensity * (f * 2.0 * PI * (1.0 - cos_outer)),
+            )
+        }
+        LightKind::Directional => {
+            let (t, b) = basis(l.direction);
+            let rr = radius * u1.sqrt();
+            let o = c - l.direction * (radius * 1.01) + (t * phi.cos() + b * phi.sin()) * rr;
+            (o, l.direction, l.intensity * (PI * radius * radius))
+        }
+    }
 }
 
 /// Traces paths `first..first+count` of stream `seed` in parallel; VPLs in path order.

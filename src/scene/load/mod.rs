@@ -1,14 +1,16 @@
 //! glTF 2.0 loading (.gltf with external or embedded buffers, and .glb), one module per part
 //! of glTF it reads: `buffers` (buffers, views, accessors), `material`, `mesh` (primitives),
-//! `nodes` (the node tree and cameras) and `animation`.
+//! `nodes` (the node tree and cameras), `lights` (KHR_lights_punctual) and `animation`.
 //!
 //! What irad uses: triangle meshes, node transforms, baseColorFactor (albedo),
-//! emissiveFactor x KHR_materials_emissive_strength (emitted radiance), the first perspective
-//! camera, and node animations. Everything else is ignored with one warning per kind.
+//! emissiveFactor x KHR_materials_emissive_strength (emitted radiance), KHR_lights_punctual
+//! lights, the first perspective camera, and node animations. Everything else is ignored
+//! with one warning per kind.
 
 mod animation;
 mod buffers;
 mod camera;
+mod lights;
 mod material;
 mod mesh;
 mod nodes;
@@ -30,7 +32,11 @@ pub struct LoadError {
 }
 
 /// Extensions irad understands; a file that requires any other is refused.
-const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_mesh_quantization"];
+const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
+    "KHR_lights_punctual",
+];
 
 /// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
 /// distances and areas overflow 32-bit floats.
@@ -46,8 +52,6 @@ const CHECK_SAMPLES: usize = 64;
 struct Ctx<'a> {
     file: &'a str,
     warnings: BTreeSet<String>,
-    /// The file's KHR_lights_punctual lights by kind ("2 point, 1 spot"), empty if none.
-    punctual: String,
 }
 
 impl Ctx<'_> {
@@ -87,7 +91,6 @@ pub fn load_slice(
     let mut cx = Ctx {
         file,
         warnings: BTreeSet::new(),
-        punctual: String::new(),
     };
     let gltf = parse(&cx, bytes)?;
     let doc = &gltf.document;
@@ -95,7 +98,8 @@ pub fn load_slice(
     warn_unused(&mut cx, doc);
     let materials = material::read(&mut cx, doc)?;
     let meshes = mesh::read(&mut cx, doc, &buffers, materials.len() - 1)?;
-    let mut graph = nodes::read(&mut cx, doc)?;
+    let lights = lights::read(&mut cx, doc)?;
+    let mut graph = nodes::read(&mut cx, doc, lights.len())?;
     let channels = animation::read(&mut cx, doc, &buffers, &mut graph.nodes)?;
     let scene = Scene {
         name: name.to_string(),
@@ -103,6 +107,7 @@ pub fn load_slice(
         meshes,
         nodes: graph.nodes,
         roots: graph.roots,
+        lights,
         camera_node: graph.camera_node,
         default_camera: Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 0.7),
         channels,
@@ -165,15 +170,8 @@ fn parse(cx: &Ctx, bytes: &[u8]) -> Result<gltf::Gltf, LoadError> {
 
 /// One warning per kind of thing in the file that irad ignores as a whole.
 fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
-    cx.punctual = punctual_lights(doc);
     for ext in doc.extensions_used() {
-        if ext == "KHR_lights_punctual" && !cx.punctual.is_empty() {
-            let w = format!(
-                "KHR_lights_punctual lights ({}) are ignored: only emissive triangles light the scene",
-                cx.punctual
-            );
-            cx.warn(w);
-        } else if !SUPPORTED_EXTENSIONS.contains(&ext) {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
             cx.warn(format!("extension {ext} is ignored"));
         }
     }
@@ -183,24 +181,6 @@ fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
     if doc.skins().next().is_some() {
         cx.warn("skins are ignored");
     }
-}
-
-/// The KHR_lights_punctual lights the file defines, counted by type ("2 point, 1 spot").
-fn punctual_lights(doc: &gltf::Document) -> String {
-    let lights = doc
-        .extension_value("KHR_lights_punctual")
-        .and_then(|v| v.get("lights"))
-        .and_then(|v| v.as_array());
-    let mut kinds = std::collections::BTreeMap::new();
-    for l in lights.into_iter().flatten() {
-        let t = l.get("type").and_then(|t| t.as_str()).unwrap_or("unknown");
-        *kinds.entry(t.to_string()).or_insert(0usize) += 1;
-    }
-    kinds
-        .iter()
-        .map(|(t, n)| format!("{n} {t}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 /// A .glb's header and chunk lengths fit in the file: a cut-off download says "truncated".
@@ -326,6 +306,15 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
                 "at t = {t} s a vertex lies at {p}, beyond irad's coordinate limit of {MAX_COORD:e}"
             )));
         }
+        if let Some(l) = f.emitters.lights.iter().find(|l| {
+            l.kind != crate::scene::LightKind::Directional
+                && l.position.abs().max_element() > MAX_COORD
+        }) {
+            return Err(cx.err(format!(
+                "at t = {t} s KHR_lights_punctual light {} ('{}') lies at {}, beyond irad's coordinate limit of {MAX_COORD:e}",
+                l.light, scene.lights[l.light].name, l.position
+            )));
+        }
         let camera = scene.file_camera(t);
         if let Some(n) = scene
             .camera_node
@@ -336,22 +325,28 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
                 scene.nodes[n].name
             )));
         }
-        let power = crate::math::luminance(f.emitters.total_power);
-        if !(power.is_finite() && power < 1e30) {
-            return Err(cx.err(format!(
-                "at t = {t} s the emitters' total power is {}, too large for 32-bit floats",
-                f.emitters.total_power
-            )));
+        for (what, p) in [
+            ("emitters'", f.emitters.total_power),
+            ("punctual lights'", f.emitters.light_power),
+        ] {
+            let power = crate::math::luminance(p);
+            if !(power.is_finite() && power < 1e30) {
+                return Err(cx.err(format!(
+                    "at t = {t} s the {what} total power is {p}, too large for 32-bit floats"
+                )));
+            }
         }
-        lit |= !f.emitters.tris.is_empty();
+        lit |= !f.emitters.is_empty();
     }
     if !lit {
-        let punctual = match cx.punctual.as_str() {
-            "" => String::new(),
-            p => format!(" (its KHR_lights_punctual lights, {p}, are not rendered by irad yet)"),
+        let lights = match scene.lights.len() {
+            0 => String::new(),
+            n => format!(
+                " (its {n} KHR_lights_punctual lights are on no node under the scene's roots, or have no intensity)"
+            ),
         };
         return Err(cx.err(format!(
-            "no emitter: no triangle has a material with emissiveFactor > 0, so there is nothing to light the scene{punctual}"
+            "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}"
         )));
     }
     Ok(())

@@ -11,11 +11,12 @@ pub(super) struct Graph {
     pub camera_node: Option<usize>,
 }
 
-pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document) -> Result<Graph, LoadError> {
+pub(super) fn read(cx: &mut Ctx, doc: &gltf::Document, lights: usize) -> Result<Graph, LoadError> {
     let mut nodes = Vec::new();
     let mut first_camera = None;
     for n in doc.nodes() {
-        let node = one(cx, &n)?;
+        let mut node = one(cx, &n)?;
+        node.light = super::lights::of_node(cx, doc, n.index(), lights)?;
         if node.camera.is_some() && first_camera.is_none() {
             first_camera = Some(n.index());
         }
@@ -48,6 +49,7 @@ fn one(cx: &mut Ctx, n: &gltf::Node) -> Result<Node, LoadError> {
         children: n.children().map(|c| c.index()).collect(),
         mesh: n.mesh().map(|m| m.index()),
         camera,
+        light: None,
     })
 }
 
