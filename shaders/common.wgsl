@@ -50,6 +50,10 @@ struct Params {
     shift_x: u32, // the interleave pattern's shift
     shift_y: u32,
     aa: u32, // sub-samples per pixel side (width, height: the sub-sample grid's)
+    near_points: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

@@ -108,6 +108,15 @@ impl Pipeline {
         // Emitter samples for direct light (a fixed stream: still scenes get still direct light).
         let lights = frame.emitter_samples(s.seed, self.renderer.config.light_samples as usize);
         lap(&mut stages, "light_samples", &mut t);
+        // The first surfaces each VPL sees, evenly over its ISM tile (closes the tiles of VPLs
+        // next to a surface, which the point set leaves full of holes).
+        let near = crate::gpu::ism::near_points(
+            &self.tracer,
+            &selection.shaded,
+            self.renderer.near_directions(),
+            self.renderer.config.ism_size,
+        );
+        lap(&mut stages, "ism_near", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
         let image = self.renderer.render(
             &GpuFrame {
@@ -115,6 +124,7 @@ impl Pipeline {
                 vpls: &selection.shaded,
                 lights: &lights,
                 dmin: s.dmin,
+                near: &near,
             },
             components,
         )?;

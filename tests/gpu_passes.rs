@@ -223,6 +223,7 @@ fn indirect(
         vpls,
         lights: &[],
         dmin,
+        near: &[],
     };
     r.render(&input, true).unwrap().indirect.unwrap()
 }

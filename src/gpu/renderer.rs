@@ -69,6 +69,9 @@ pub struct GpuFrame<'a> {
     pub lights: &'a [EmitterSample],
     /// Distance clamp of the gather (`--clamp`).
     pub dmin: f32,
+    /// The VPLs' near-field points ([`ism::near_points`] over [`Renderer::near_directions`],
+    /// in slot order), or none (then the ISMs hold the point set alone).
+    pub near: &'a [ism::Point],
 }
 
 /// A frame's rendered image: linear HDR, the 8-bit preview, optionally its components, and
@@ -151,6 +154,10 @@ pub struct Renderer {
     /// `false` redraws and uploads everything every frame.
     pub reuse: bool,
     last: Last,
+    /// The near-field ray directions in a VPL's frame (see [`ism::near_points`]).
+    near_dirs: Vec<Vec3>,
+    /// The ISM point set followed by the slots' near-field points.
+    points: wgpu::Buffer,
     /// Each slot's offset into the ISM point set.
     offsets: Vec<u32>,
     /// (slot, offset) of the slots whose ISM tiles are redrawn this frame.
@@ -278,11 +285,16 @@ impl Renderer {
             storage,
         );
         let points = ism::point_set(points_frame, c.num_points as usize, c.seed);
-        let points_buf = gpu.buffer(
-            "ism points",
-            bytes::<ism::Point>(points.len() as u64),
-            storage,
-        );
+        // The point set, then room for every slot's near-field points.
+        let near_dirs = ism::near_directions(ism::near_grid(c.ism_size, c.pull_levels));
+        let points_len = points.len() as u64 + c.max_vpls as u64 * near_dirs.len() as u64;
+        check_size(
+            &gpu.limits,
+            "the ISM points",
+            bytes::<ism::Point>(points_len),
+            "lower --vpls or --ism-points",
+        )?;
+        let points_buf = gpu.buffer("ism points", bytes::<ism::Point>(points_len), storage);
         gpu.queue
             .write_buffer(&points_buf, 0, bytemuck::cast_slice(&points));
         let offsets: Vec<u32> = (0..c.max_vpls)
@@ -363,6 +375,8 @@ impl Renderer {
         let timestamps = has_timestamps(&gpu).then(|| Timestamps::new(&gpu, PASSES.len() as u32));
         let profiling = Profiling::default_for(&gpu);
         Ok(Renderer {
+            near_dirs,
+            points: points_buf.clone(),
             gpu,
             config,
             profiling,
@@ -391,8 +405,31 @@ impl Renderer {
     }
 
     /// Checks that the frame fits what the renderer was built for.
+    /// The near-field ray directions each VPL's points are cast along, in its frame (z along
+    /// its normal): what [`GpuFrame::near`] holds for each VPL.
+    pub fn near_directions(&self) -> &[Vec3] {
+        &self.near_dirs
+    }
+
+    /// Near-field points per slot this frame: all of [`Self::near_directions`], or none.
+    fn near_points(&self, input: &GpuFrame) -> u32 {
+        if input.near.is_empty() {
+            0
+        } else {
+            self.near_dirs.len() as u32
+        }
+    }
+
     fn check_input(&self, input: &GpuFrame) -> Result<()> {
         let (f, c) = (input.frame, &self.config);
+        if !input.near.is_empty() && input.near.len() != input.vpls.len() * self.near_dirs.len() {
+            bail!(
+                "{} near-field points for {} VPLs: there must be {} for each, or none",
+                input.near.len(),
+                input.vpls.len(),
+                self.near_dirs.len()
+            );
+        }
         if f.tris.len() != self.tri_count {
             bail!(
                 "the frame has {} triangles but the renderer was built for {}",
@@ -504,6 +541,13 @@ impl Renderer {
         let f = input.frame;
         let still = self.upload_geometry(f);
         let (changed, vpls_uploaded) = self.upload_vpls(input.vpls, still);
+        if !changed.is_empty() && !input.near.is_empty() {
+            self.gpu.queue.write_buffer(
+                &self.points,
+                bytes::<ism::Point>(self.config.num_points as u64),
+                bytemuck::cast_slice(input.near),
+            );
+        }
         let lights_kept = self.upload_lights(input.lights);
         let c = &self.config;
         let (gw, gh) = c.grid();
@@ -529,6 +573,10 @@ impl Renderer {
             shift_x: self.interleave_shift.0 % c.interleave,
             shift_y: self.interleave_shift.1 % c.interleave,
             aa: c.aa,
+            near_points: self.near_points(input),
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         };
         self.gpu
             .queue
@@ -582,8 +630,11 @@ impl Renderer {
         self.direct.encode(&mut rec.enc, gw, gh);
         rec.end_pass()?;
         // ism_splat: point set, VPLs, changed slots -> ISM atlas tiles of those slots.
-        self.ism
-            .encode_splat(&mut rec.enc, changed_slots, c.points_per_vpl);
+        self.ism.encode_splat(
+            &mut rec.enc,
+            changed_slots,
+            c.points_per_vpl + self.near_points(input),
+        );
         rec.end_pass()?;
         // ism_pullpush: ISM atlas -> hole-filled pyramid of the changed slots.
         self.ism.encode_pull_push(&mut rec.enc, changed_slots);
