@@ -156,6 +156,7 @@ mod tests {
         assert_eq!(r.vpls, d.vpls);
         assert_eq!(r.sequence.size, d.sequence.size);
         assert_eq!(r.quality.ism_size, d.quality.ism_size);
+        assert_eq!(r.quality.aa, d.quality.aa);
         assert_eq!(r.sampler.mh_escape, d.sampler.mh_escape);
         assert_eq!(r.out, d.out);
         let Command::Compare(c) = parse(&["compare"]).unwrap() else {
@@ -211,6 +212,9 @@ mod tests {
             ("render", "--pull-levels", "", "100"),
             ("render", "--light-samples", "0", "100000"),
             ("render", "--shadow-size", "4", "100000"),
+            ("render", "--aa", "0", "9"),
+            ("compare", "--aa", "0", "9"),
+            ("bench", "--aa", "0", "9"),
             ("reference", "--spp", "0", "99999999"),
             ("compare", "--vpls", "0", "70000"),
             ("compare", "--spp", "0", "99999999"),

@@ -436,6 +436,10 @@ pub struct Quality {
     /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all)
     #[arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true)]
     pub interleave: u32,
+    /// Anti-aliasing: S x S sub-samples per pixel, box-filtered into the pixel (the
+    /// reference's pixel filter); the passes run at S times the size (1: pixel centres only)
+    #[arg(long, default_value_t = Quality::default().aa, allow_hyphen_values = true)]
+    pub aa: u32,
 }
 
 impl Default for Quality {
@@ -448,6 +452,10 @@ impl Default for Quality {
             light_samples: 32,
             shadow_size: 256,
             interleave: 4,
+            // 2x2 sub-samples: measured on the Cornell box at 128x128 (README, "Pixels"),
+            // the mean luminance goes from +6.9% of the reference's to +0.9% for +20% of the
+            // frame's time; 3x3 and 4x4 cost 2.2x and 3.1x.
+            aa: 2,
         }
     }
 }
@@ -480,7 +488,8 @@ impl Quality {
         check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
         check::int("--light-samples", self.light_samples, 1, 4096)?;
         check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
-        check::int("--interleave", self.interleave, 1, 8)
+        check::int("--interleave", self.interleave, 1, 8)?;
+        check::int("--aa", self.aa, 1, 8)
     }
 }
 
@@ -611,6 +620,7 @@ impl Render {
             light_samples: q.light_samples,
             shadow_size: q.shadow_size,
             interleave: q.interleave,
+            aa: q.aa,
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,

@@ -60,10 +60,13 @@ impl Pipeline {
         let classical = (cfg.method != Method::Instant).then(|| Classical {
             settings: cfg.radiosity_settings(&scene),
             cache: radiosity::Cache::default(),
-            pass: RadiosityPass::new(
+            // The same sub-samples per pixel as the frame it adds to (checked against the
+            // adapter with the renderer's).
+            pass: RadiosityPass::with_aa(
                 &renderer.gpu,
                 cfg.sequence.size.width,
                 cfg.sequence.size.height,
+                renderer.config.aa,
             ),
         });
         Ok(Pipeline {

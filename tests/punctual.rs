@@ -581,6 +581,8 @@ fn gpu_run(scene: &Scene) -> GpuRun {
     cfg.vpls = 512;
     cfg.quality.light_samples = 8;
     cfg.quality.interleave = 1;
+    // The CPU twin shades pixel centres: one sample a pixel (no --aa supersampling).
+    cfg.quality.aa = 1;
     cfg.sampler.mh_escape = 0;
     cfg.clamp = Some(0.1);
     cfg.backend = backend;
