@@ -49,7 +49,11 @@ struct Params {
     interleave: u32, // interleaved gather block side (1: off)
     shift_x: u32, // the interleave pattern's shift
     shift_y: u32,
-    _pad: u32,
+    aa: u32, // sub-samples per pixel side (width, height: the sub-sample grid's)
+    near_points: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.
@@ -96,6 +100,15 @@ fn ism_depth(v: f32) -> f32 {
 }
 
 // The G-buffer texel: xyz world position bits, w = triangle index + 1 (0: nothing hit).
+// The tile of the sub-sample grid of `size` samples with `aa` sub-samples per pixel side
+// that sample `q` lies in, row-major (0 without supersampling): tile t = ty * aa + tx holds
+// every pixel's sub-sample (tx, ty).
+fn subsample_tile(q: vec2u, size: vec2u, aa: u32) -> u32 {
+    let s = max(aa, 1u);
+    let t = q / (size / s);
+    return min(t.y, s - 1u) * s + min(t.x, s - 1u);
+}
+
 fn gbuffer_x(g: vec4u) -> vec3f {
     return bitcast<vec3f>(g.xyz);
 }

@@ -1,5 +1,12 @@
 // Compose: emission seen from the camera (front faces only) + direct + indirect, then exposure
 // and the sRGB transfer for the 8-bit preview.
+// Supersampled (P.aa = S > 1) it runs on every sub-sample of the grid of S x S tiles, while
+// the indirect light (gather and interleave filter) was computed once per pixel, on tile 0,
+// without the albedo: a sub-sample takes the irradiance of the pixel's tile-0 sample if that
+// lies on its own surface (normals within ~25 degrees, within 1% of the camera distance of
+// its tangent plane, as the interleave filter's test), else of the nearest of the 8
+// neighbouring pixels' samples that does, else the pixel's own; times its own albedo. It
+// writes that per sub-sample (`indirect_ss`) for the resolve, and leaves the preview to it.
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -8,6 +15,40 @@
 @group(0) @binding(4) var<storage, read> indirect: array<vec4f>;
 @group(0) @binding(5) var<storage, read_write> hdr: array<vec4f>;
 @group(0) @binding(6) var<storage, read_write> ldr: array<u32>;
+@group(0) @binding(7) var<storage, read_write> indirect_ss: array<vec4f>;
+
+// The interleave filter's surface test (see interleave.wgsl).
+const NORMAL_COS: f32 = 0.9;
+const PLANE_REL: f32 = 0.01;
+
+// Supersampled: the irradiance (no albedo) for sub-sample `q` at point x with normal n, from
+// the tile-0 samples of its pixel and of the neighbouring pixels.
+fn indirect_of(q: vec2u, x: vec3f, n: vec3f) -> vec3f {
+    let s = max(P.aa, 1u);
+    let size = vec2i(vec2u(P.width, P.height) / s);
+    let px = vec2i(q % vec2u(size));
+    let tol = PLANE_REL * distance(x, P.cam_pos.xyz);
+    // The pixel, its 4 edge neighbours, then its corners.
+    var order = array<vec2i, 9>(
+        vec2i(0, 0), vec2i(1, 0), vec2i(-1, 0), vec2i(0, 1), vec2i(0, -1),
+        vec2i(1, 1), vec2i(-1, 1), vec2i(1, -1), vec2i(-1, -1));
+    for (var k = 0; k < 9; k++) {
+        let c = px + order[k];
+        if c.x < 0 || c.y < 0 || c.x >= size.x || c.y >= size.y {
+            continue;
+        }
+        let gc = textureLoad(gbuf, c, 0);
+        if gc.w == 0u {
+            continue;
+        }
+        let xc = gbuffer_x(gc);
+        let nc = facing(tris[gc.w - 1u].n.xyz, xc, P.cam_pos.xyz);
+        if dot(nc, n) >= NORMAL_COS && abs(dot(xc - x, n)) <= tol {
+            return indirect[u32(c.y) * P.width + u32(c.x)].xyz;
+        }
+    }
+    return indirect[u32(px.y) * P.width + u32(px.x)].xyz;
+}
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
@@ -22,9 +63,23 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         if dot(tri.n.xyz, P.cam_pos.xyz - gbuffer_x(g)) > 0.0 {
             c = tri.emission.xyz;
         }
-        c += direct[pix].xyz + indirect[pix].xyz;
+        if P.aa > 1u {
+            let x = gbuffer_x(g);
+            let e = indirect_of(gid.xy, x, facing(tri.n.xyz, x, P.cam_pos.xyz));
+            let ind = e * tri.albedo.xyz;
+            indirect_ss[pix] = vec4f(ind, 1.0);
+            c += direct[pix].xyz + ind;
+        } else {
+            c += direct[pix].xyz + indirect[pix].xyz;
+        }
+    } else if P.aa > 1u {
+        indirect_ss[pix] = vec4f(0.0);
     }
     hdr[pix] = vec4f(c, 1.0);
+    // Supersampled, `resolve` makes the preview from the box-filtered pixels.
+    if P.aa > 1u {
+        return;
+    }
     let t = clamp(c * P.exposure, vec3f(0.0), vec3f(1.0));
     let s = vec3u(vec3f(srgb_oetf(t.x), srgb_oetf(t.y), srgb_oetf(t.z)) * 255.0 + 0.5);
     ldr[pix] = s.x | (s.y << 8u) | (s.z << 16u) | (255u << 24u);

@@ -5,6 +5,10 @@
 // along normal; pos the centre of its orthographic map, normal.w its half-width), 4 a point light
 // outside the geometry (intensity toward it, normal the axis of one shadow face zoomed to the
 // half-width normal.w at unit distance).
+// Supersampled (P.aa = S > 1) with at least S^2 samples, the S^2 sub-samples of a pixel split
+// them: the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that
+// the pixel's resolve holds every sample once at the cost of one sample point per pixel
+// (with fewer samples, as from a few punctual lights, every sub-sample sums them all).
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -47,7 +51,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
     let size = f32(p.shadow_size);
     var sum = vec3f(0.0);
-    for (var j = 0u; j < p.num_light_samples; j++) {
+    let s = max(p.aa, 1u);
+    let share = select(1u, s * s, p.num_light_samples >= s * s);
+    let first = select(0u, subsample_tile(gid.xy, vec2u(p.width, p.height), s), share > 1u);
+    for (var j = first; j < p.num_light_samples; j += share) {
         let ls = lights[j];
         let kind = u32(ls.pos.w);
         let ln = ls.normal.xyz;
@@ -105,5 +112,5 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
         sum += ls.radiance.xyz * (f * cos_x / d2);
     }
-    direct[pix] = vec4f(sum * tri.albedo.xyz / PI, 1.0);
+    direct[pix] = vec4f(sum * f32(share) * tri.albedo.xyz / PI, 1.0);
 }

@@ -3,6 +3,10 @@
 // the pixel at block position k = ((y + shift_y) mod n) * n + (x + shift_x) mod n sums only
 // the VPLs i with i mod n^2 = k, scaled by n^2, and writes that irradiance-like sum without
 // the albedo: the `interleave` pass filters it and applies the albedo.
+// Supersampled (P.aa = S > 1), the gather (and the interleave filter) run at one sample per
+// pixel, on tile 0 of the sub-sample grid, and leave the albedo out: compose gives each
+// sub-sample the indirect light of the pixel's sample or of a neighbour's on its own surface
+// (indirect light is smooth), times its own albedo.
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -58,6 +62,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     if side > 1u {
         indirect[pix] = vec4f(sum * f32(step), 1.0);
     } else {
-        indirect[pix] = vec4f(sum * tri.albedo.xyz, 1.0);
+        // Supersampled, compose applies each sub-sample's own albedo.
+        let albedo = select(tri.albedo.xyz, vec3f(1.0), p.aa > 1u);
+        indirect[pix] = vec4f(sum * albedo, 1.0);
     }
 }

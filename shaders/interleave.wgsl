@@ -7,6 +7,8 @@
 // weight one; any
 // accepted neighbour's value alone is an unbiased estimate of the full gather over the
 // pattern's random shift, so their mean is too.
+// Supersampled (P.aa = S > 1) the grid is S x S tiles, each a whole image: the window
+// keeps to the pixel's own tile.
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -40,12 +42,17 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let side = i32(max(p.interleave, 1u));
     let even = side % 2 == 0;
     let h = side / 2;
+    // The pixel's tile of the sub-sample grid (the whole grid without supersampling).
+    let s = max(p.aa, 1u);
+    let tile = vec2u(p.width / s, p.height / s);
+    let lo = vec2i((gid.xy / tile) * tile);
+    let hi = lo + vec2i(tile);
     var sum = vec3f(0.0);
     var count = 0.0;
     for (var dy = -h; dy <= h; dy++) {
         for (var dx = -h; dx <= h; dx++) {
             let q = vec2i(gid.xy) + vec2i(dx, dy);
-            if q.x < 0 || q.y < 0 || q.x >= i32(p.width) || q.y >= i32(p.height) {
+            if q.x < lo.x || q.y < lo.y || q.x >= hi.x || q.y >= hi.y {
                 continue;
             }
             let gq = textureLoad(gbuf, q, 0);
@@ -64,5 +71,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
     }
     // The pixel itself always passes (weight 1): count >= 1.
-    indirect[pix] = vec4f(sum / count * tri.albedo.xyz, 1.0);
+    // Supersampled, compose applies each sub-sample's own albedo.
+    let albedo = select(tri.albedo.xyz, vec3f(1.0), p.aa > 1u);
+    indirect[pix] = vec4f(sum / count * albedo, 1.0);
 }

@@ -1,4 +1,5 @@
-// ISM splat: every VPL slot to redraw projects its own subset of the scene's points into its
+// ISM splat: every VPL slot to redraw projects its own subset of the scene's points, then its
+// ray-cast near-field points (the first surfaces its VPL sees, evenly over the tile), into its
 // paraboloid tile, keeping the nearest with atomicMax on an inverted depth (0 means empty).
 // `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other slots keep
 // their tiles.
@@ -31,11 +32,20 @@ fn clear(@builtin(global_invocation_id) gid: vec3u) {
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     let j = gid.x;
     let k = gid.y;
-    if j >= P.points_per_vpl || k >= P.num_changed {
+    if j >= P.points_per_vpl + P.near_points || k >= P.num_changed {
         return;
     }
     let s = slots[k].x;
-    let pt = points[(slots[k].y + j) % P.num_points];
+    var pt: Point;
+    if j < P.points_per_vpl {
+        pt = points[(slots[k].y + j) % P.num_points];
+    } else {
+        // The slot's ray-cast near-field points, after the point set; a miss is no point.
+        pt = points[P.num_points + s * P.near_points + j - P.points_per_vpl];
+        if pt.tri == 0xffffffffu {
+            return;
+        }
+    }
     let tri = tris[pt.tri];
     let p = tri.v0.xyz * (1.0 - pt.b1 - pt.b2) + tri.v1.xyz * pt.b1 + tri.v2.xyz * pt.b2;
     let v = vpls[s];
@@ -49,6 +59,19 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         return;
     }
     let texel = paraboloid_texel(dir, v.normal.xyz, P.ism_size);
-    let depth = u32(clamp(dist / P.far, 0.0, 1.0) * 16777215.0);
-    atomicMax(&atlas[s * P.ism_size * P.ism_size + texel], 16777216u - depth);
+    let depth = 16777216u - u32(clamp(dist / P.far, 0.0, 1.0) * 16777215.0);
+    let base = s * P.ism_size * P.ism_size;
+    // A near-field point stands for its ray's whole cell of the tile (pad: the cell's
+    // half-width in texels), so it covers what lies behind it there; a point of the set, one texel.
+    let r = i32(pt.pad);
+    let size = i32(P.ism_size);
+    let t = vec2i(i32(texel % P.ism_size), i32(texel / P.ism_size));
+    for (var dy = -r; dy <= r; dy++) {
+        for (var dx = -r; dx <= r; dx++) {
+            let q = t + vec2i(dx, dy);
+            if all(q >= vec2i(0)) && all(q < vec2i(size)) {
+                atomicMax(&atlas[base + u32(q.y * size + q.x)], depth);
+            }
+        }
+    }
 }

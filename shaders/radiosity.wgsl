@@ -1,8 +1,9 @@
 // Radiosity display: the element mesh rasterized with its Gouraud colours (radiance at the
 // vertices, emission included, interpolated across each element) as float bits in an
 // integer target (renderable everywhere, GL included); back faces are black (elements are
-// one-sided). `resolve` copies the float target into the per-pixel buffer the
-// other passes use.
+// one-sided). `resolve` box-filters each pixel's S x S sub-samples (rad_size.z = S, 1
+// without supersampling; the target holds S x S tiles of the image, tile (i, j) sampling
+// every pixel at sub-sample (i, j)) into the per-pixel buffer the other passes use.
 
 struct RadCamera {
     view_proj: mat4x4f,
@@ -45,6 +46,14 @@ fn resolve(@builtin(global_invocation_id) gid: vec3u) {
     if gid.x >= rad_size.x || gid.y >= rad_size.y {
         return;
     }
-    let t = textureLoad(rad_image, vec2i(gid.xy), 0);
-    rad_out[gid.y * rad_size.x + gid.x] = vec4f(bitcast<vec3f>(t.xyz), f32(t.w));
+    // Tile (i, j) of the target holds every pixel's sub-sample (i, j).
+    let s = max(rad_size.z, 1u);
+    var sum = vec4f(0.0);
+    for (var ty = 0u; ty < s; ty++) {
+        for (var tx = 0u; tx < s; tx++) {
+            let t = textureLoad(rad_image, vec2i(gid.xy + vec2u(tx, ty) * rad_size.xy), 0);
+            sum += vec4f(bitcast<vec3f>(t.xyz), f32(t.w));
+        }
+    }
+    rad_out[gid.y * rad_size.x + gid.x] = sum / f32(s * s);
 }

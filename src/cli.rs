@@ -41,6 +41,10 @@ pub enum Command {
         /// With --scene: frames per second (frame f is at time f / fps)
         #[arg(long, default_value_t = 24.0, allow_hyphen_values = true)]
         fps: f32,
+        /// With --scene: the --camera EYE:TARGET:FOV the frames were rendered with (the
+        /// motion warp must see the scene from the same camera)
+        #[arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")]
+        camera: Option<config::CameraSpec>,
     },
     /// Print the graphics adapters found and the one irad chooses
     Info {
@@ -66,8 +70,17 @@ impl Command {
             Command::Reference(c) => c.validate(),
             Command::Compare(c) => c.validate(),
             Command::Bench(c) => c.validate(),
-            Command::Metrics { fps, .. } => {
-                crate::config::check::float("--fps", *fps, 0.0, true, 1000.0)
+            Command::Metrics {
+                fps, camera, scene, ..
+            } => {
+                crate::config::check::float("--fps", *fps, 0.0, true, 1000.0)?;
+                if camera.is_some() && scene.is_none() {
+                    anyhow::bail!("--camera needs --scene: it is the camera the scene's frames were rendered with");
+                }
+                match camera {
+                    Some(c) => c.validate(),
+                    None => Ok(()),
+                }
             }
             Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
@@ -89,10 +102,18 @@ pub fn run(cli: Cli) -> Result<()> {
             out,
             scene,
             fps,
+            camera,
         } => {
             commands::metrics::metrics(&test, &reference, out.as_deref())?;
             match scene {
-                Some(s) => commands::metrics::warped(&test, &reference, &s, fps, out.as_deref()),
+                Some(s) => commands::metrics::warped(
+                    &test,
+                    &reference,
+                    &s,
+                    fps,
+                    camera.as_ref(),
+                    out.as_deref(),
+                ),
                 None => Ok(()),
             }
         }
@@ -135,6 +156,7 @@ mod tests {
         assert_eq!(r.vpls, d.vpls);
         assert_eq!(r.sequence.size, d.sequence.size);
         assert_eq!(r.quality.ism_size, d.quality.ism_size);
+        assert_eq!(r.quality.aa, d.quality.aa);
         assert_eq!(r.sampler.mh_escape, d.sampler.mh_escape);
         assert_eq!(r.out, d.out);
         let Command::Compare(c) = parse(&["compare"]).unwrap() else {
@@ -190,6 +212,9 @@ mod tests {
             ("render", "--pull-levels", "", "100"),
             ("render", "--light-samples", "0", "100000"),
             ("render", "--shadow-size", "4", "100000"),
+            ("render", "--aa", "0", "9"),
+            ("compare", "--aa", "0", "9"),
+            ("bench", "--aa", "0", "9"),
             ("reference", "--spp", "0", "99999999"),
             ("compare", "--vpls", "0", "70000"),
             ("compare", "--spp", "0", "99999999"),
@@ -208,6 +233,57 @@ mod tests {
                 assert!(e.contains(flag), "irad {cmd} {flag} {bad}: {e}");
             }
         }
+    }
+
+    /// `--camera` on every command that renders or measures a scene: bad syntax (clap's parse),
+    /// non-finite or far points, eye on target, field of view 0, 180 or past it (validate), each
+    /// refused naming the flag and what is wrong.
+    #[test]
+    fn camera_is_checked_and_named_on_every_command() {
+        let bad = [
+            ("0,0,1:0,0,0", "EYE:TARGET:FOV"),
+            ("0,0:0,0,0:40", "three numbers"),
+            ("0,0,x:0,0,0:40", "'x' in the eye"),
+            ("nan,0,1:0,0,0:40", "eye is not a finite"),
+            ("0,0,1:0,inf,0:40", "target is not a finite"),
+            ("1e30,0,1:0,0,0:40", "farther than"),
+            ("1,2,3:1,2,3:40", "same point"),
+            ("0,0,1:0,0,0:0", "field of view 0 degrees"),
+            ("0,0,1:0,0,0:180", "between 0 and 180"),
+            ("0,0,1:0,0,0:-40", "between 0 and 180"),
+            ("0,0,1:0,0,0:nan", "field of view NaN"),
+        ];
+        for cmd in [
+            &["render"][..],
+            &["reference"],
+            &["compare"],
+            &["bench"],
+            &["metrics", "a", "b", "--scene", "cornell"],
+        ] {
+            for (spec, why) in bad {
+                let mut args = cmd.to_vec();
+                args.extend(["--camera", spec]);
+                let e = error(&args);
+                assert!(
+                    e.contains("--camera") && e.contains(why),
+                    "irad {}: {e}",
+                    args.join(" ")
+                );
+            }
+            let mut args = cmd.to_vec();
+            args.extend(["--camera", "0,1,3.4:0,1,0:39.3"]);
+            parse(&args).unwrap().validate().unwrap();
+        }
+        let Command::Render(r) = parse(&["render", "--camera", "-1,2.5,3:0,1e-3,0:20"]).unwrap()
+        else {
+            panic!()
+        };
+        let c = r.sequence.camera.unwrap();
+        assert_eq!(c.eye, glam::Vec3::new(-1.0, 2.5, 3.0));
+        assert_eq!(c.target, glam::Vec3::new(0.0, 1e-3, 0.0));
+        assert_eq!(c.fov_deg, 20.0);
+        let e = error(&["metrics", "a", "b", "--camera", "0,0,1:0,0,0:40"]);
+        assert!(e.contains("--camera needs --scene"), "{e}");
     }
 
     #[test]

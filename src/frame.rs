@@ -60,10 +60,13 @@ impl Pipeline {
         let classical = (cfg.method != Method::Instant).then(|| Classical {
             settings: cfg.radiosity_settings(&scene),
             cache: radiosity::Cache::default(),
-            pass: RadiosityPass::new(
+            // The same sub-samples per pixel as the frame it adds to (checked against the
+            // adapter with the renderer's).
+            pass: RadiosityPass::with_aa(
                 &renderer.gpu,
                 cfg.sequence.size.width,
                 cfg.sequence.size.height,
+                renderer.config.aa,
             ),
         });
         Ok(Pipeline {
@@ -105,6 +108,15 @@ impl Pipeline {
         // Emitter samples for direct light (a fixed stream: still scenes get still direct light).
         let lights = frame.emitter_samples(s.seed, self.renderer.config.light_samples as usize);
         lap(&mut stages, "light_samples", &mut t);
+        // The first surfaces each VPL sees, evenly over its ISM tile (closes the tiles of VPLs
+        // next to a surface, which the point set leaves full of holes).
+        let near = crate::gpu::ism::near_points(
+            &self.tracer,
+            &selection.shaded,
+            self.renderer.near_directions(),
+            self.renderer.config.ism_size,
+        );
+        lap(&mut stages, "ism_near", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
         let image = self.renderer.render(
             &GpuFrame {
@@ -112,6 +124,7 @@ impl Pipeline {
                 vpls: &selection.shaded,
                 lights: &lights,
                 dmin: s.dmin,
+                near: &near,
             },
             components,
         )?;

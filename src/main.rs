@@ -3,6 +3,10 @@ use clap::Parser;
 fn main() {
     irad::gpu::quiet_mesa_runtime_dir();
     if let Err(e) = irad::cli::run(irad::cli::Cli::parse()) {
+        // The reader of stdout has gone (`irad scenes | head -1`): nothing to say, no failure.
+        if irad::commands::is_closed_pipe(&e) {
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

@@ -206,6 +206,8 @@ fn interleaved(
     c.quality.light_samples = 1;
     c.quality.shadow_size = 16;
     c.quality.interleave = n;
+    // The filter's tests hold it to pixel-centre twins: one sample per pixel.
+    c.quality.aa = 1;
     irad::gpu::Renderer::new(gpu.clone(), c.renderer_config(), frame).unwrap()
 }
 
@@ -221,6 +223,7 @@ fn indirect(
         vpls,
         lights: &[],
         dmin,
+        near: &[],
     };
     r.render(&input, true).unwrap().indirect.unwrap()
 }

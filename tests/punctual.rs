@@ -581,6 +581,8 @@ fn gpu_run(scene: &Scene) -> GpuRun {
     cfg.vpls = 512;
     cfg.quality.light_samples = 8;
     cfg.quality.interleave = 1;
+    // The CPU twin shades pixel centres: one sample a pixel (no --aa supersampling).
+    cfg.quality.aa = 1;
     cfg.sampler.mh_escape = 0;
     cfg.clamp = Some(0.1);
     cfg.backend = backend;
@@ -644,9 +646,11 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
     );
     // Measured on lavapipe: direct 0.00168; relMSE 0.0893 (mostly the geometric edges: the
     // GPU shades pixel centres, the reference averages over each pixel) and relative bias
-    // -0.00068 (the VPLs' distance clamp loses little light here).
+    // -0.00068 (the VPLs' distance clamp loses little light here); -0.0062 since each VPL's
+    // ray-cast near-field points cover whole cells of its ISM (tests/thin_gap.rs): a cell at an
+    // occluder's silhouette shadows up to half a cell past it.
     let direct_bound = 0.0025;
-    let (rel_mse_bound, bias_bound) = (0.134, 0.001);
+    let (rel_mse_bound, bias_bound) = (0.134, 0.0093);
     let direct_gpu = r.out.image.direct.as_ref().unwrap();
     if show_images()
         || r.direct_diff > direct_bound

@@ -78,6 +78,42 @@ fn compare(extra: &[&str], out: &Path, cache: &Path) -> std::process::Output {
         .unwrap()
 }
 
+/// `--sweep` and `--spp` are checked before anything renders, with errors naming the flag.
+#[test]
+fn compare_refuses_bad_sweeps_naming_the_flag() {
+    let out = tmp("bad-sweep");
+    let cache = tmp("bad-sweep-cache");
+    for (args, expect) in [
+        (&["--sweep", "mh:mh-rate"][..], "--sweep"),
+        (&["--sweep", "mh-rate=0.1"], "names no sampler"),
+        (&["--sweep", "mx:mh-rate=0.1"], "'mx' in 'mx:mh-rate=0.1' is not a sampler"),
+        (&["--sweep", "mh:speed=1"], "'speed' in 'mh:speed=1' is not a knob"),
+        (&["--sweep", "mh:mh-rate=0.1,x"], "'x' in 'mh:mh-rate=0.1,x' is not a number"),
+        (&["--sweep", "mh:candidates=2.5"], "candidates takes whole numbers"),
+        (&["--sweep", "mh:mh-rate=0.1,2"], "--sweep mh:mh-rate=0.1,2: --mh-rate 2 is out of range"),
+        (&["--sweep", "cdf:mh-rate=0.1"], "--sweep cdf:mh-rate=0.1: cdf does not use --mh-rate (it uses --eps, --candidates, --camera-points)"),
+        (&["--sweep", "uniform:eps=0.1", "--samplers", "uniform"], "uniform does not use --eps (it uses none of the knobs; sweep --vpls instead)"),
+        (&["--sweep", "rejection:eps=0.1"], "rejection is not one of --samplers uniform,cdf,mh"),
+    ] {
+        let o = compare(args, &out, &cache);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} was accepted");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!cache.join("reference").exists(), "{args:?} traced a reference");
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+        .args(["compare", "--spp", "1", "--cache", cache.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("--spp 1: the reference is traced as two independent halves"),
+        "{err}"
+    );
+    assert!(!cache.join("reference").exists());
+}
+
 #[test]
 fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
     let out = tmp("out");
@@ -90,10 +126,54 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("metrics.json")).unwrap()).unwrap();
     assert_eq!(json["runs"].as_array().unwrap().len(), 6);
+    // The reference's noise floor: in metrics.json, the table, the page and the flicker
+    // charts. cornell-box's moving block changes the reference's light paths, so its noise
+    // changes from frame to frame there: the F1 floor is positive, and below the runs'.
+    let floor = &json["floor"];
+    let f1 = floor["flicker_f1"].as_f64().unwrap();
+    let rel = floor["rel_mse"].as_f64().unwrap();
+    assert_eq!(floor["spp"], serde_json::json!([2, 2]));
+    assert!(f1 > 0.0 && rel > 0.0, "{floor}");
+    assert!(floor["warped_f1"].as_f64().unwrap() > 0.0, "{floor}");
+    for run in json["runs"].as_array().unwrap() {
+        assert!(run["metrics"]["flicker_f1"].as_f64().unwrap() > f1, "{run}");
+        assert!(run["warped"]["kept"].as_f64().unwrap() > 0.9, "{run}");
+    }
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.lines().any(|l| l.starts_with("reference floor")
+            && l.contains(&format!(" {rel:.5} "))
+            && l.contains(&format!(" {f1:.5} "))),
+        "{stdout}"
+    );
+    let page_text = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(page_text.contains("reference noise floor (2+2 spp halves)"));
     for chart in [
+        "flicker",
+        "speed_flicker",
+        "flicker_error",
+        "warped_flicker",
+    ] {
+        let svg = std::fs::read_to_string(out.join("charts").join(format!("{chart}.svg"))).unwrap();
+        assert!(
+            svg.contains("reference noise floor"),
+            "{chart}.svg has no floor"
+        );
+        assert!(page_text.contains(&svg), "{chart}.svg is not on the page");
+    }
+    // The constant floor is drawn at its value, written in the legend.
+    let svg = std::fs::read_to_string(out.join("charts/flicker_error.svg")).unwrap();
+    assert!(
+        svg.contains(&format!("F1 {f1:.2e}")),
+        "no F1 {f1:.2e} in flicker_error.svg"
+    );
+    for chart in [
+        "flicker_error",
+        "warped_flicker_error",
         "speed_accuracy",
         "speed_flicker",
         "flicker",
+        "warped_flicker",
         "relmse",
         "replaced",
     ] {
@@ -112,11 +192,20 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
         .map(|e| e.unwrap().path())
         .collect();
     assert_eq!(folders.len(), 1);
-    let frame = folders[0].join("frame_0002.exr");
+    let frame = folders[0].join("a/frame_0002.exr");
+    assert!(folders[0].join("b/frame_0002.exr").exists());
     let before = frame.metadata().unwrap().modified().unwrap();
     let again_out = tmp("again");
+    // With a sweep: mh once per rate, one curve on the flicker-against-error chart.
     let again = compare(
-        &["--vpls", "16", "--samplers", "uniform"],
+        &[
+            "--vpls",
+            "16",
+            "--samplers",
+            "uniform,mh",
+            "--sweep",
+            "mh:mh-rate=0.1,1",
+        ],
         &again_out,
         &cache,
     );
@@ -124,6 +213,32 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
         again.status.success(),
         "{}",
         String::from_utf8_lossy(&again.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(again_out.join("metrics.json")).unwrap()).unwrap();
+    let runs: Vec<(String, Option<f64>)> = json["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                format!("{} {}", r["sampler"].as_str().unwrap(), r["knob"]),
+                r["knob_value"].as_f64(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        runs,
+        [
+            ("uniform null".to_string(), None),
+            ("mh \"mh-rate\"".to_string(), Some(0.1)),
+            ("mh \"mh-rate\"".to_string(), Some(1.0)),
+        ]
+    );
+    let svg = std::fs::read_to_string(again_out.join("charts/flicker_error.svg")).unwrap();
+    assert!(
+        svg.contains("mh 16 (mh-rate 0.1..1)"),
+        "no mh curve in flicker_error.svg"
     );
     assert_eq!(
         frame.metadata().unwrap().modified().unwrap(),
@@ -161,7 +276,7 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
         "the page's own check says: '{check}'"
     );
     assert!(
-        check.contains("broken=0") && check.contains("charts=5"),
+        check.contains("broken=0") && check.contains("charts=8"),
         "{check}"
     );
     // 1 reference + 3 samplers x (frames + error) = 7 images.

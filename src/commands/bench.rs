@@ -1,7 +1,6 @@
 //! `irad bench`: time per stage of whole frames, averaged after one warm-up frame, for
 //! several VPL counts and image sizes, all on one device.
 
-use super::load_scene;
 use super::render::{FrameRecord, StageMeans};
 use crate::config;
 use crate::frame::Pipeline;
@@ -23,7 +22,10 @@ struct BenchRow {
 pub fn bench(cfg: &config::Bench) -> Result<()> {
     cfg.validate()?;
     let spec = cfg.scene_name();
-    let scene = load_scene(spec)?;
+    let scene = cfg
+        .render
+        .sequence
+        .load_scene(config::DEFAULT_STILL_SCENE)?;
     let gpu = Arc::new(Gpu::new(cfg.render.backend)?);
     let adapter = gpu.adapter.clone();
     report::prepare_out_dir(&cfg.render.out)?;
@@ -50,11 +52,11 @@ pub fn bench(cfg: &config::Bench) -> Result<()> {
         });
     }
     pb.finish_and_clear();
-    println!(
+    crate::outln!(
         "scene {spec}, adapter {adapter}, {} CPU threads, mean of {} frames after one warm-up",
         rayon::current_num_threads(),
         cfg.repeat
-    );
+    )?;
     let how = match profiling {
         Some(crate::gpu::Profiling::Timestamps) => "GPU timestamp queries, one submission a frame",
         Some(crate::gpu::Profiling::Serialized) => {
@@ -62,27 +64,27 @@ pub fn bench(cfg: &config::Bench) -> Result<()> {
         }
         _ => "not timed (--profiling off): one submission a frame",
     };
-    println!("pass times: {how}");
-    print!("{:16}", "stage (ms)");
+    crate::outln!("pass times: {how}")?;
+    crate::out!("{:16}", "stage (ms)")?;
     for r in &rows {
-        print!("{:>20}", format!("{} VPLs {}", r.case.vpls, r.case.size));
+        crate::out!("{:>20}", format!("{} VPLs {}", r.case.vpls, r.case.size))?;
     }
-    println!();
+    crate::outln!()?;
     for (i, (name, _)) in rows[0].stages.iter().enumerate() {
         if rows.iter().all(|r| r.stages[i].1 == 0.0) {
             continue;
         }
-        print!("{name:16}");
+        crate::out!("{name:16}")?;
         for r in &rows {
-            print!("{:>20.2}", r.stages[i].1 * 1e3);
+            crate::out!("{:>20.2}", r.stages[i].1 * 1e3)?;
         }
-        println!();
+        crate::outln!()?;
     }
-    print!("{:16}", "frame");
+    crate::out!("{:16}", "frame")?;
     for r in &rows {
-        print!("{:>20.2}", r.seconds_per_frame * 1e3);
+        crate::out!("{:>20.2}", r.seconds_per_frame * 1e3)?;
     }
-    println!();
+    crate::outln!()?;
     report::write_json(
         &cfg.render.out.join("bench.json"),
         &serde_json::json!({ "scene": spec, "adapter": adapter, "settings": cfg, "rows": rows }),

@@ -32,12 +32,17 @@ pub fn metrics(
 ) -> Result<crate::metrics::SequenceMetrics> {
     let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
     let m = crate::metrics::sequence(&numbers, &t, &r)?;
-    println!(
+    crate::outln!(
         "{:>6} {:>10} {:>10} {:>10} {:>10} {:>8}",
-        "frame", "relMSE", "RMSE", "bias", "flicker", "FLIP"
-    );
+        "frame",
+        "relMSE",
+        "RMSE",
+        "bias",
+        "flicker",
+        "FLIP"
+    )?;
     for f in &m.frames {
-        println!(
+        crate::outln!(
             "{:>6} {:>10.5} {:>10.5} {:>+10.5} {:>10} {:>8.4}",
             f.frame,
             f.error.rel_mse,
@@ -47,38 +52,43 @@ pub fn metrics(
                 .map(|v| format!("{v:.5}"))
                 .unwrap_or_else(|| "-".into()),
             f.flip
-        );
+        )?;
     }
-    println!(
+    crate::outln!(
         "mean relMSE {:.5}, RMSE {:.5}, bias {:+.5}, FLIP {:.4}; flicker F1 {:.5} (RMS {:.5}); temporal variance {:.3e}, temporal bias^2 {:.3e}",
         m.mean_rel_mse, m.mean_rmse, m.mean_bias, m.mean_flip, m.flicker_f1, m.flicker_rms, m.temporal_variance, m.temporal_bias
-    );
+    )?;
     let dir = out.unwrap_or(test);
     report::prepare_out_dir(dir)?;
     report::write_json(&dir.join("metrics.json"), &m)?;
     crate::image::write_bytes(&dir.join("metrics.csv"), metrics_csv(&m).as_bytes())?;
-    println!("wrote {}/metrics.json and metrics.csv", dir.display());
+    crate::outln!("wrote {}/metrics.json and metrics.csv", dir.display())?;
     Ok(m)
 }
 
-/// `irad metrics ... --scene S`: motion-compensated flicker of the frames of scene `S`.
+/// `irad metrics ... --scene S`: motion-compensated flicker of the frames of scene `S`, seen
+/// from `camera` when the frames were rendered with `--camera`.
 pub fn warped(
     test: &Path,
     reference: &Path,
     scene: &str,
     fps: f32,
+    camera: Option<&crate::config::CameraSpec>,
     out: Option<&Path>,
 ) -> Result<()> {
     let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
-    let scene = crate::scene::builtin::load_any(scene)?;
+    let mut scene = crate::scene::builtin::load_any(scene)?;
+    if let Some(c) = camera {
+        c.apply(&mut scene)?;
+    }
     let w = crate::metrics::warp::for_scene(&scene, fps, &numbers, &t, &r)?;
-    println!(
+    crate::outln!(
         "warped flicker F1 {:.5} ({:.1}% of pixels kept)",
         w.f1,
         100.0 * w.kept
-    );
+    )?;
     let dir = out.unwrap_or(test);
     report::write_json(&dir.join("warped.json"), &w)?;
-    println!("wrote {}/warped.json", dir.display());
+    crate::outln!("wrote {}/warped.json", dir.display())?;
     Ok(())
 }

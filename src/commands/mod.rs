@@ -3,6 +3,34 @@
 //! `render`, `reference`, `compare`, `bench`, `metrics` have a module each; `info` and
 //! `scenes` are here.
 
+/// `print!` that returns the write's error instead of panicking: when the reader of a pipe
+/// has gone (`irad scenes FILE | head -1`), the command stops with that error and `irad`'s
+/// `main` exits quietly with status 0 (see [`is_closed_pipe`]).
+#[macro_export]
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($t)*)
+    }};
+}
+
+/// `println!` that returns the write's error instead of panicking (see [`out!`]).
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($t)*)
+    }};
+}
+
+/// Whether `e` is a write to a pipe whose reader has gone (then there is no one to tell).
+pub fn is_closed_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
 pub mod bench;
 pub mod compare;
 pub mod metrics;
@@ -27,10 +55,10 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
 /// `irad scenes FILE` inspects one.
 pub fn scenes(scene: Option<&str>, generate: Option<&Path>) -> Result<()> {
     if let Some(spec) = scene {
-        print!(
+        crate::out!(
             "{}",
             crate::scene::inspect::inspect(&builtin::load_any(spec)?)
-        );
+        )?;
         return Ok(());
     }
     if let Some(dir) = generate {
@@ -39,20 +67,20 @@ pub fn scenes(scene: Option<&str>, generate: Option<&Path>) -> Result<()> {
             let text = builtin::generate(b.name).expect("every built-in has a generator");
             let path = dir.join(format!("{}.gltf", b.name));
             crate::image::write_bytes(&path, text.as_bytes())?;
-            println!("wrote {}", path.display());
+            crate::outln!("wrote {}", path.display())?;
         }
         return Ok(());
     }
     for b in builtin::BUILTINS {
         let scene = builtin::load(b.name).expect("listed")?;
         let f = scene.at(0.0);
-        println!(
+        crate::outln!(
             "{:14} {:5} triangles  {:4.1} s  {}",
             b.name,
             f.tris.len(),
             scene.duration(),
             b.stresses
-        );
+        )?;
     }
     Ok(())
 }
@@ -61,19 +89,19 @@ pub fn scenes(scene: Option<&str>, generate: Option<&Path>) -> Result<()> {
 pub fn info(backend: crate::gpu::BackendChoice) -> Result<()> {
     let list = crate::gpu::adapters(backend);
     if list.is_empty() {
-        println!("no adapters found");
+        crate::outln!("no adapters found")?;
     }
     for (a, usable) in &list {
-        println!("{} {a}", if *usable { "usable " } else { "no     " });
+        crate::outln!("{} {a}", if *usable { "usable " } else { "no     " })?;
     }
     let gpu = crate::gpu::Gpu::new(backend)?;
-    println!("chosen: {}", gpu.adapter);
+    crate::outln!("chosen: {}", gpu.adapter)?;
     let l = &gpu.limits;
-    println!(
+    crate::outln!(
         "limits: storage buffer {} MiB, 2D texture {}, array layers {}",
         l.max_storage_buffer_binding_size >> 20,
         l.max_texture_dimension_2d,
         l.max_texture_array_layers
-    );
+    )?;
     Ok(())
 }

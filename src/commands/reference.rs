@@ -1,6 +1,5 @@
 //! `irad reference`: path-traced ground truth, one EXR + PNG per frame and run.json.
 
-use super::load_scene;
 use crate::config;
 use crate::image::Hdr;
 use crate::report;
@@ -67,7 +66,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     cfg.validate()?;
     let seq = &cfg.sequence;
     let spec = seq.scene_or(config::DEFAULT_STILL_SCENE);
-    let scene = load_scene(spec)?;
+    let scene = seq.load_scene(config::DEFAULT_STILL_SCENE)?;
     let out = &cfg.out;
     report::prepare_run_dir(out)?;
     let frames = seq.frames_or_first();
@@ -103,11 +102,16 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     pb.finish_and_clear();
     report::write_json(&out.join("run.json"), &record)?;
     for fr in &record.frames {
-        println!(
+        crate::outln!(
             "frame {:4}  t={:.3}s  {:.2}s  mean RGB ({:.4}, {:.4}, {:.4})",
-            fr.frame, fr.time, fr.seconds, fr.mean_rgb[0], fr.mean_rgb[1], fr.mean_rgb[2]
-        );
+            fr.frame,
+            fr.time,
+            fr.seconds,
+            fr.mean_rgb[0],
+            fr.mean_rgb[1],
+            fr.mean_rgb[2]
+        )?;
     }
-    println!("wrote {} frames to {}", record.frames.len(), out.display());
+    crate::outln!("wrote {} frames to {}", record.frames.len(), out.display())?;
     Ok(images)
 }

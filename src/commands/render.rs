@@ -5,7 +5,6 @@
 //! settings, the adapter, the summary, and the per-frame records read back from
 //! `frames.jsonl`).
 
-use super::load_scene;
 use crate::config;
 use crate::frame::{FrameOutput, Pipeline};
 use crate::gpu::{AdapterDesc, Gpu};
@@ -96,12 +95,13 @@ impl StageMeans {
         )
     }
     /// Prints one line per stage that took any time (stages a run skipped are left out).
-    pub fn print(&self) {
+    pub fn print(&self) -> std::io::Result<()> {
         let (frame, stages) = self.means();
-        println!("mean seconds per frame: {frame:.3}");
+        crate::outln!("mean seconds per frame: {frame:.3}")?;
         for (name, t) in stages.iter().filter(|(_, t)| *t > 0.0) {
-            println!("  {name:14} {:8.2} ms", t * 1e3);
+            crate::outln!("  {name:14} {:8.2} ms", t * 1e3)?;
         }
+        Ok(())
     }
 }
 
@@ -135,7 +135,7 @@ pub fn render(cfg: &config::Render) -> Result<RenderSummary> {
 pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     cfg.validate()?;
     let spec = cfg.scene_name();
-    let scene = load_scene(spec)?;
+    let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
     // Sizes are checked against the adapter, and the folder for writing, before any frame.
     let mut pipeline = Pipeline::new(gpu, scene, cfg)?;
     let out = &cfg.out;
@@ -174,23 +174,23 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             frames: read_json_lines(&out.join("frames.jsonl"))?,
         },
     )?;
-    println!("adapter: {adapter}");
+    crate::outln!("adapter: {adapter}")?;
     let method = match cfg.method {
         crate::radiosity::Method::Instant => {
             format!("{} VPLs, sampler {}", cfg.vpls, cfg.sampler.kind)
         }
         m => format!("method {}", m.name()),
     };
-    println!(
+    crate::outln!(
         "{} frames of {spec} at {}, {method}",
         frames.len(),
         cfg.sequence.size
-    );
-    means.print();
-    println!(
+    )?;
+    means.print()?;
+    crate::outln!(
         "wrote {}/frame_*.exr, frame_*.png, preview.gif, run.json, frames.jsonl",
         out.display()
-    );
+    )?;
     Ok(RenderSummary {
         adapter,
         frames,

@@ -28,7 +28,15 @@ gpu_struct! {
         pub interleave: u32,
         pub shift_x: u32,
         pub shift_y: u32,
-        pub _pad: u32,
+        /// Supersampling: sub-samples per pixel side (width and height above are the
+        /// sub-sample grid's, `aa` times the output's).
+        pub aa: u32,
+        /// Ray-cast near-field points each redrawn ISM slot splats besides its subset of the
+        /// point set (stored after the point set, `near_points` per slot; see `ism`).
+        pub near_points: u32,
+        pub _pad0: u32,
+        pub _pad1: u32,
+        pub _pad2: u32,
     }
 }
 

@@ -18,6 +18,7 @@ pub(crate) const PASS: Pass = Pass {
             read("indirect", Elem::Plain(16)),
             read_write("hdr", Elem::Plain(16)),
             read_write("ldr", Elem::Plain(4)),
+            read_write("indirect_ss", Elem::Plain(16)),
         ],
     }],
 };
@@ -26,21 +27,28 @@ pub struct Compose {
     pass: PixelPass,
     pub hdr: wgpu::Buffer,
     pub ldr: wgpu::Buffer,
+    /// Supersampled (`aa > 1`): each sub-sample's indirect light, for the resolve (else a
+    /// placeholder of 16 bytes).
+    pub indirect_ss: wgpu::Buffer,
 }
 
 impl Compose {
+    /// Composes `pixels` samples from the direct and indirect light; `supersampled`: the
+    /// samples are the sub-samples of `--aa` > 1 and the indirect light is per pixel.
     pub fn new(
         gpu: &Gpu,
         params: &wgpu::Buffer,
         tris: &wgpu::Buffer,
         gbuf: &wgpu::TextureView,
-        direct: &wgpu::Buffer,
-        indirect: &wgpu::Buffer,
+        (direct, indirect): (&wgpu::Buffer, &wgpu::Buffer),
         pixels: u64,
+        supersampled: bool,
     ) -> Self {
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let hdr = gpu.buffer("hdr", bytes::<[f32; 4]>(pixels), usage);
         let ldr = gpu.buffer("ldr", bytes::<u32>(pixels), usage);
+        let ss = if supersampled { pixels } else { 1 };
+        let indirect_ss = gpu.buffer("indirect per sub-sample", bytes::<[f32; 4]>(ss), usage);
         let pass = PixelPass::new(
             gpu,
             &PASS,
@@ -52,9 +60,15 @@ impl Compose {
                 ("indirect", indirect.as_entire_binding()),
                 ("hdr", hdr.as_entire_binding()),
                 ("ldr", ldr.as_entire_binding()),
+                ("indirect_ss", indirect_ss.as_entire_binding()),
             ],
         );
-        Compose { pass, hdr, ldr }
+        Compose {
+            pass,
+            hdr,
+            ldr,
+            indirect_ss,
+        }
     }
 
     pub fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {

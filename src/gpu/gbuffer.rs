@@ -1,9 +1,12 @@
 //! G-buffer pass (`shaders/gbuffer.wgsl`): the camera's view rasterized into world position
-//! and triangle index per pixel, at pixel centres.
+//! and triangle index per sample. With `aa = 1` the samples are the pixel centres; with
+//! supersampling (`aa = S`) the target holds S x S tiles, each the whole image sampled at one
+//! offset inside every pixel ([`subsample`]): tile (i, j) is drawn with the projection moved
+//! by that offset ([`jittered`]) into its own viewport (see docs/antialiasing.md).
 
 use super::bindings::{gpu_struct, Group, Pass};
 use super::Gpu;
-use glam::Mat4;
+use glam::{Mat4, Vec2, Vec3};
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
@@ -19,7 +22,7 @@ pub(crate) const PASS: Pass = Pass {
     wgsl: include_str!("../../shaders/gbuffer.wgsl"),
     groups: &[Group {
         stages: wgpu::ShaderStages::VERTEX,
-        bindings: &[super::bindings::uniform("cam", &Camera::LAYOUT)],
+        bindings: &[super::bindings::dynamic_uniform("cam", &Camera::LAYOUT)],
     }],
 };
 
@@ -48,12 +51,45 @@ impl Vertex {
     ];
 }
 
+/// Sub-sample (i, j) of `s x s` in a pixel: its offset from the pixel's top-left corner, in
+/// pixels (x right, y down). The `s^2` offsets are a rotated lattice: one in each cell of the
+/// pixel's `s x s` grid and, in x and in y alike, one in each of `s^2` equal strips (n-rooks),
+/// so that an edge parallel to an image axis is resolved to `1/s^2` of a pixel. `s = 1`: the
+/// centre.
+pub fn subsample(i: u32, j: u32, s: u32) -> Vec2 {
+    let (i, j, s) = (i as f32, j as f32, s as f32);
+    Vec2::new((i + (j + 0.5) / s) / s, (j + (s - i - 0.5) / s) / s)
+}
+
+/// `view_proj` for a `width x height` viewport moved so that its pixel centres sample the
+/// image at offset `o` (see [`subsample`]) inside each pixel instead of at the centre.
+pub fn jittered(view_proj: Mat4, o: Vec2, width: u32, height: u32) -> Mat4 {
+    // Clip-space x and y move by the offset in NDC units (times w), y up in NDC.
+    let d = Vec3::new(
+        2.0 * (0.5 - o.x) / width as f32,
+        -2.0 * (0.5 - o.y) / height as f32,
+        0.0,
+    );
+    Mat4::from_translation(d) * view_proj
+}
+
+/// Bytes from one uniform to the next at dynamic offsets (the adapter's alignment).
+pub(crate) fn uniform_stride<T>(gpu: &Gpu) -> u64 {
+    (std::mem::size_of::<T>() as u64)
+        .next_multiple_of(gpu.limits.min_uniform_buffer_offset_alignment as u64)
+}
+
 pub struct GBuffer {
     pipeline: wgpu::RenderPipeline,
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pub view: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// Output size and sub-samples per pixel side (the target is `aa` times the size).
+    width: u32,
+    height: u32,
+    aa: u32,
+    stride: u64,
 }
 
 pub(crate) fn target(
@@ -86,28 +122,30 @@ pub(crate) fn target(
 }
 
 impl GBuffer {
-    pub fn new(gpu: &Gpu, width: u32, height: u32) -> Self {
+    /// The G-buffer of a `width x height` image with `aa x aa` sub-samples per pixel.
+    pub fn new(gpu: &Gpu, width: u32, height: u32, aa: u32) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
         let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
+        let stride = uniform_stride::<Camera>(gpu);
         let uniform = gpu.buffer(
-            "gbuffer camera",
-            std::mem::size_of::<Camera>() as u64,
+            "gbuffer cameras",
+            stride * (aa * aa) as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let bind_group = PASS.groups[0].bind(
-            gpu,
-            PASS.name,
-            &layout,
-            &[("cam", uniform.as_entire_binding())],
-        );
-        let view =
-            target(gpu, "gbuffer", width, height, 1, FORMAT, true).create_view(&Default::default());
+        let cam = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &uniform,
+            offset: 0,
+            size: wgpu::BufferSize::new(std::mem::size_of::<Camera>() as u64),
+        });
+        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &[("cam", cam)]);
+        let (gw, gh) = (width * aa, height * aa);
+        let view = target(gpu, "gbuffer", gw, gh, 1, FORMAT, true).create_view(&Default::default());
         let depth = target(
             gpu,
             "gbuffer depth",
-            width,
-            height,
+            gw,
+            gh,
             1,
             wgpu::TextureFormat::Depth32Float,
             false,
@@ -119,6 +157,10 @@ impl GBuffer {
             bind_group,
             view,
             depth,
+            width,
+            height,
+            aa,
+            stride,
         }
     }
 
@@ -130,39 +172,64 @@ impl GBuffer {
         count: u32,
         view_proj: Mat4,
     ) {
-        let cam = Camera {
-            view_proj: view_proj.to_cols_array_2d(),
-        };
-        gpu.queue
-            .write_buffer(&self.uniform, 0, bytemuck::bytes_of(&cam));
-        raster(
+        let (s, w, h) = (self.aa, self.width, self.height);
+        let mut bytes = vec![0u8; self.stride as usize * (s * s) as usize];
+        let mut tiles = Vec::new();
+        for j in 0..s {
+            for i in 0..s {
+                let k = (j * s + i) as usize;
+                let cam = Camera {
+                    view_proj: jittered(view_proj, subsample(i, j, s), w, h).to_cols_array_2d(),
+                };
+                let o = k * self.stride as usize;
+                bytes[o..o + std::mem::size_of::<Camera>()]
+                    .copy_from_slice(bytemuck::bytes_of(&cam));
+                tiles.push(((k as u64 * self.stride) as u32, [i * w, j * h, w, h]));
+            }
+        }
+        gpu.queue.write_buffer(&self.uniform, 0, &bytes);
+        raster_tiles(
             enc,
             "gbuffer",
-            &self.pipeline,
-            &self.bind_group,
-            &[],
-            &self.view,
-            &self.depth,
+            (&self.pipeline, &self.bind_group),
+            &tiles,
+            (&self.view, &self.depth),
             vertices,
             count,
         );
     }
 }
 
-/// One render pass over the scene's triangles into a colour view and a depth view.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn raster(
+/// One render pass over the scene's triangles into a colour view and a depth view, drawn once
+/// per tile: (dynamic offset of its uniform, viewport x, y, width, height).
+pub(crate) fn raster_tiles(
     enc: &mut wgpu::CommandEncoder,
     label: &str,
-    pipeline: &wgpu::RenderPipeline,
-    bind_group: &wgpu::BindGroup,
-    offsets: &[u32],
-    color: &wgpu::TextureView,
-    depth: &wgpu::TextureView,
+    (pipeline, bind_group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
+    tiles: &[(u32, [u32; 4])],
+    (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
     vertices: &wgpu::Buffer,
     count: u32,
 ) {
-    let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+    let mut pass = begin(enc, label, color, depth);
+    pass.set_pipeline(pipeline);
+    pass.set_vertex_buffer(0, vertices.slice(..));
+    for &(offset, [x, y, w, h]) in tiles {
+        pass.set_bind_group(0, bind_group, &[offset]);
+        pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+        pass.set_scissor_rect(x, y, w, h);
+        pass.draw(0..count, 0..1);
+    }
+}
+
+/// A render pass clearing `color` (to zero: no surface) and `depth` (to the far plane).
+pub(crate) fn begin<'a>(
+    enc: &'a mut wgpu::CommandEncoder,
+    label: &str,
+    color: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+) -> wgpu::RenderPass<'a> {
+    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some(label),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
             view: color,
@@ -184,7 +251,23 @@ pub(crate) fn raster(
         timestamp_writes: None,
         occlusion_query_set: None,
         multiview_mask: None,
-    });
+    })
+}
+
+/// One render pass over the scene's triangles into a colour view and a depth view.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn raster(
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::RenderPipeline,
+    bind_group: &wgpu::BindGroup,
+    offsets: &[u32],
+    color: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    vertices: &wgpu::Buffer,
+    count: u32,
+) {
+    let mut pass = begin(enc, label, color, depth);
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, offsets);
     pass.set_vertex_buffer(0, vertices.slice(..));

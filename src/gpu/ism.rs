@@ -13,7 +13,7 @@ use super::common::{Params, Tri, Vpl};
 use super::{dispatch, groups_1d, Gpu};
 use crate::math::{rng, triangle_barycentrics};
 use crate::scene::Frame;
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use rand::Rng;
 
 gpu_struct! {
@@ -96,6 +96,82 @@ pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
             }
         })
         .collect()
+}
+
+/// Side of the grid of near-field rays for a tile of `ism_size` texels whose holes pull-push
+/// fills up to `2^pull_levels` texels: the rays land about 0.7 of that apart, so the nearest
+/// surfaces a VPL sees leave no hole pull-push cannot close (13 for 64 texels, 3 levels).
+pub fn near_grid(ism_size: u32, pull_levels: u32) -> u32 {
+    let hole = 1u32 << pull_levels.min(ism_size.trailing_zeros());
+    (ism_size * 3 / (2 * hole) + 1).clamp(4, 32)
+}
+
+/// The near-field ray directions of a grid of side `n`, in a VPL's frame (z along its normal):
+/// the centres of an n x n grid over the paraboloid map's square that fall inside its disk,
+/// mapped back to directions, so they cover the tile evenly.
+pub fn near_directions(n: u32) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let u = (i as f32 + 0.5) / n as f32 * 2.0 - 1.0;
+            let v = (j as f32 + 0.5) / n as f32 * 2.0 - 1.0;
+            let r2 = u * u + v * v;
+            if r2 < 1.0 {
+                out.push(Vec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2));
+            }
+        }
+    }
+    out
+}
+
+/// Each VPL's near-field points: the first surface hit by each of `dirs` (see
+/// [`near_directions`]) cast from it, as (triangle, barycentrics), `u32::MAX` for a miss;
+/// `dirs.len()` points per VPL, in slot order.
+///
+/// Why: the point set is spread over the scene by area, so a surface close to a VPL gets few
+/// points while it covers most of the VPL's tile; the tile is then mostly holes and the VPL
+/// shines through it. A VPL in a thin gap (between a lamp's top and the ceiling) sees the
+/// room through its whole tile instead of a sliver. The ray-cast points are spread by solid
+/// angle, so whatever a VPL sees first closes its tile.
+pub fn near_points(
+    tracer: &crate::trace::Tracer,
+    vpls: &[crate::vpl::ShadedVpl],
+    dirs: &[Vec3],
+    ism_size: u32,
+) -> Vec<Point> {
+    // Each ray stands for a cell of the tile: it covers a square of (2 half + 1) texels.
+    let n = (dirs_side(dirs.len())).max(1);
+    let half = ism_size.div_ceil(n) / 2;
+    use rayon::prelude::*;
+    vpls.par_iter()
+        .flat_map_iter(|v| {
+            let (t, b) = v.normal.any_orthonormal_pair();
+            dirs.iter().map(move |d| {
+                let w = t * d.x + b * d.y + v.normal * d.z;
+                match tracer.intersect(tracer.offset(v.position, v.normal, w), w, f32::INFINITY) {
+                    Some(h) => Point {
+                        tri: h.tri,
+                        b1: h.b1,
+                        b2: h.b2,
+                        pad: half,
+                    },
+                    None => Point {
+                        tri: u32::MAX,
+                        b1: 0.0,
+                        b2: 0.0,
+                        pad: 0,
+                    },
+                }
+            })
+        })
+        .collect()
+}
+
+/// The grid side whose disk holds `count` directions (inverse of [`near_directions`]).
+fn dirs_side(count: usize) -> u32 {
+    (1..=64u32)
+        .find(|&n| near_directions(n).len() >= count)
+        .unwrap_or(64)
 }
 
 /// The offset into the point set of slot `slot`'s subset (depends on the seed and slot only).
@@ -225,7 +301,7 @@ impl Ism {
 
     /// Empties the tiles of the first `changed` entries of the slots buffer and splats their
     /// points; the other tiles are kept.
-    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, changed: u32, points_per_vpl: u32) {
+    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, changed: u32, points_per_slot: u32) {
         debug_assert!(changed <= self.max_vpls);
         if changed == 0 {
             return;
@@ -243,7 +319,7 @@ impl Ism {
             "ism splat",
             &self.splat,
             &[&self.splat_group],
-            (points_per_vpl.div_ceil(64), changed, 1),
+            (points_per_slot.div_ceil(64), changed, 1),
         );
     }
 

@@ -13,6 +13,7 @@ pub mod ism;
 pub mod profile;
 pub mod radiosity;
 pub mod renderer;
+pub mod resolve;
 pub mod shadow;
 
 use anyhow::{anyhow, bail, Result};

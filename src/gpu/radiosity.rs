@@ -1,7 +1,9 @@
 //! Radiosity display pass (`shaders/radiosity.wgsl`): a classical radiosity solution's
 //! element mesh rasterized from the camera with Gouraud colours (the radiance interpolated
 //! from the vertices, emission included), then resolved into a per-pixel HDR buffer. Its CPU
-//! twin is `radiosity::display::render_cpu`.
+//! twin is `radiosity::display::render_cpu`. With supersampling (`--aa S`) the mesh is
+//! rasterized at S x S sub-samples per pixel and the resolve box-filters them, as the
+//! instant-radiosity frame's `resolve` pass does.
 
 use super::{gbuffer::target, Gpu};
 
@@ -60,6 +62,10 @@ struct CameraUniform {
 pub struct RadiosityPass {
     width: u32,
     height: u32,
+    /// Sub-samples per pixel side: the target holds `aa x aa` tiles of the image (as the
+    /// G-buffer's), one camera uniform each at `stride` bytes.
+    aa: u32,
+    stride: u64,
     raster: wgpu::RenderPipeline,
     camera: wgpu::Buffer,
     raster_group: wgpu::BindGroup,
@@ -74,7 +80,15 @@ pub struct RadiosityPass {
 }
 
 impl RadiosityPass {
+    /// The pass at one sample per pixel (its centre).
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> Self {
+        Self::with_aa(gpu, width, height, 1)
+    }
+
+    /// The pass with `aa x aa` sub-samples per pixel, box-filtered (`aa` >= 1; the caller
+    /// checks the sub-sample grid against the adapter, as `renderer::check_config` does).
+    pub fn with_aa(gpu: &Gpu, width: u32, height: u32, aa: u32) -> Self {
+        let aa = aa.max(1);
         let module = gpu.shader("radiosity", include_str!("../../shaders/radiosity.wgsl"));
         let raster_layout = layout(
             gpu,
@@ -82,7 +96,11 @@ impl RadiosityPass {
             &[entry(
                 0,
                 wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                buffer_ty(wgpu::BufferBindingType::Uniform),
+                wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: None,
+                },
             )],
         );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
@@ -97,9 +115,10 @@ impl RadiosityPass {
                 attributes: &attributes,
             },
         );
+        let stride = super::gbuffer::uniform_stride::<CameraUniform>(gpu);
         let camera = gpu.buffer(
-            "radiosity camera",
-            std::mem::size_of::<CameraUniform>() as u64,
+            "radiosity cameras",
+            stride * (aa * aa) as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let raster_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -107,16 +126,20 @@ impl RadiosityPass {
             layout: &raster_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
-                resource: camera.as_entire_binding(),
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &camera,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<CameraUniform>() as u64),
+                }),
             }],
         });
-        let color = target(gpu, "radiosity", width, height, 1, FORMAT, true)
+        let color = target(gpu, "radiosity", width * aa, height * aa, 1, FORMAT, true)
             .create_view(&Default::default());
         let depth = target(
             gpu,
             "radiosity depth",
-            width,
-            height,
+            width * aa,
+            height * aa,
             1,
             wgpu::TextureFormat::Depth32Float,
             false,
@@ -133,7 +156,7 @@ impl RadiosityPass {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         gpu.queue
-            .write_buffer(&size, 0, bytemuck::cast_slice(&[width, height, 0u32, 0u32]));
+            .write_buffer(&size, 0, bytemuck::cast_slice(&[width, height, aa, 0u32]));
         // The resolve binds 1..3 (binding 0 is the raster's camera).
         let cs = wgpu::ShaderStages::COMPUTE;
         let resolve_layout = layout(
@@ -180,6 +203,8 @@ impl RadiosityPass {
         RadiosityPass {
             width,
             height,
+            aa,
+            stride,
             raster,
             camera,
             raster_group,
@@ -249,42 +274,47 @@ impl RadiosityPass {
             * 1.5;
         let near = (far * 1e-5).max(1e-3);
         let cam = &frame.camera;
-        let u = CameraUniform {
-            view_proj: cam.projection(self.width, self.height, near, far) * cam.view(),
-            position: cam.position.extend(1.0).to_array(),
-        };
-        gpu.queue
-            .write_buffer(&self.camera, 0, bytemuck::bytes_of(&u));
-        {
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("radiosity"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.color,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            if let (Some(v), true) = (&self.vertices, self.count > 0) {
-                pass.set_pipeline(&self.raster);
-                pass.set_bind_group(0, &self.raster_group, &[]);
-                pass.set_vertex_buffer(0, v.slice(..));
-                pass.draw(0..self.count, 0..1);
+        let view_proj = cam.projection(self.width, self.height, near, far) * cam.view();
+        // One camera per tile of the target, each moved to its sub-sample (as the G-buffer's).
+        let (s, w, h) = (self.aa, self.width, self.height);
+        let mut bytes = vec![0u8; self.stride as usize * (s * s) as usize];
+        let mut tiles = Vec::new();
+        for j in 0..s {
+            for i in 0..s {
+                let k = (j * s + i) as usize;
+                let u = CameraUniform {
+                    view_proj: super::gbuffer::jittered(
+                        view_proj,
+                        super::gbuffer::subsample(i, j, s),
+                        w,
+                        h,
+                    ),
+                    position: cam.position.extend(1.0).to_array(),
+                };
+                let o = k * self.stride as usize;
+                bytes[o..o + std::mem::size_of::<CameraUniform>()]
+                    .copy_from_slice(bytemuck::bytes_of(&u));
+                tiles.push(((k as u64 * self.stride) as u32, [i * w, j * h, w, h]));
             }
+        }
+        gpu.queue.write_buffer(&self.camera, 0, &bytes);
+        match &self.vertices {
+            Some(v) if self.count > 0 => super::gbuffer::raster_tiles(
+                enc,
+                "radiosity",
+                (&self.raster, &self.raster_group),
+                &tiles,
+                (&self.color, &self.depth),
+                v,
+                self.count,
+            ),
+            // Nothing to draw: the cleared target (no surface anywhere).
+            _ => drop(super::gbuffer::begin(
+                enc,
+                "radiosity",
+                &self.color,
+                &self.depth,
+            )),
         }
         super::dispatch(
             enc,

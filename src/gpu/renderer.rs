@@ -1,7 +1,7 @@
 //! The GPU frame: uploads the frame's triangles, VPLs and emitter samples, runs the passes in
 //! order (G-buffer, shadow hemicubes, direct light, ISM splat, pull-push, gather, interleave
-//! filter, compose) and
-//! reads the frame back, all in one submission (or, profiling without timestamp queries,
+//! filter, compose, and with supersampling the resolve that box-filters sub-samples into
+//! pixels) and reads the frame back, all in one submission (or, profiling without timestamp queries,
 //! one per pass: see `profile`).
 
 use super::bindings::bytes;
@@ -10,7 +10,7 @@ use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
 use super::{
     check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer,
-    interleave::Interleave, ism, shadow::ShadowMaps, Gpu,
+    interleave::Interleave, ism, resolve::Resolve, shadow::ShadowMaps, Gpu,
 };
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
@@ -42,11 +42,23 @@ pub struct RendererConfig {
     pub shadow_size: u32,
     /// Shadow depth bias, in texel footprints.
     pub shadow_bias: f32,
-    /// Interleaved gather block side (1: every pixel gathers every VPL; see `interleave`).
+    /// Interleaved gather block side (1: every pixel gathers every VPL; see `interleave`),
+    /// in sub-samples.
     pub interleave: u32,
+    /// Supersampling: the passes run on `aa x aa` sub-samples per pixel and `resolve`
+    /// box-filters them into pixels (1: one sample at each pixel centre).
+    pub aa: u32,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,
+}
+
+impl RendererConfig {
+    /// The sub-sample grid the passes before `resolve` run on: `aa x aa` tiles of the output
+    /// size, tile (i, j) sampling every pixel at `gbuffer::subsample(i, j, aa)`.
+    pub fn grid(&self) -> (u32, u32) {
+        (self.width * self.aa, self.height * self.aa)
+    }
 }
 
 /// What one GPU frame needs besides the renderer's fixed state.
@@ -57,6 +69,9 @@ pub struct GpuFrame<'a> {
     pub lights: &'a [EmitterSample],
     /// Distance clamp of the gather (`--clamp`).
     pub dmin: f32,
+    /// The VPLs' near-field points ([`ism::near_points`] over [`Renderer::near_directions`],
+    /// in slot order), or none (then the ISMs hold the point set alone).
+    pub near: &'a [ism::Point],
 }
 
 /// A frame's rendered image: linear HDR, the 8-bit preview, optionally its components, and
@@ -77,7 +92,7 @@ pub struct RenderedImage {
 }
 
 /// The passes of a frame, in order, as timings name them.
-pub const PASSES: [&str; 8] = [
+pub const PASSES: [&str; 9] = [
     "gbuffer",
     "shadow_maps",
     "direct",
@@ -86,6 +101,7 @@ pub const PASSES: [&str; 8] = [
     "gather",
     "interleave",
     "compose",
+    "resolve",
 ];
 
 /// What a frame reused from the previous one (for run records).
@@ -138,6 +154,10 @@ pub struct Renderer {
     /// `false` redraws and uploads everything every frame.
     pub reuse: bool,
     last: Last,
+    /// The near-field ray directions in a VPL's frame (see [`ism::near_points`]).
+    near_dirs: Vec<Vec3>,
+    /// The ISM point set followed by the slots' near-field points.
+    points: wgpu::Buffer,
     /// Each slot's offset into the ISM point set.
     offsets: Vec<u32>,
     /// (slot, offset) of the slots whose ISM tiles are redrawn this frame.
@@ -158,6 +178,8 @@ pub struct Renderer {
     /// The interleave pattern's shift in x and y (from the seed; each below `interleave`).
     pub interleave_shift: (u32, u32),
     compose: Compose,
+    /// The box filter of the sub-samples into pixels (`aa > 1`).
+    resolve: Option<Resolve>,
 }
 
 /// The checks that must pass before anything renders: sizes against the adapter's limits.
@@ -195,6 +217,9 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
             limits.max_texture_array_layers / 5
         );
     }
+    if !(1..=8).contains(&c.aa) {
+        bail!("--aa {} is out of range (1 to 8)", c.aa);
+    }
     let max2d = limits.max_texture_dimension_2d;
     if c.width > max2d || c.height > max2d || c.shadow_size > max2d || c.shadow_size < 8 {
         bail!(
@@ -204,11 +229,22 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
             c.shadow_size
         );
     }
+    // Supersampled, the G-buffer and every per-pixel buffer before `resolve` hold aa^2
+    // sub-samples per pixel.
+    let (gw, gh) = (c.width as u64 * c.aa as u64, c.height as u64 * c.aa as u64);
+    if gw > max2d as u64 || gh > max2d as u64 {
+        bail!(
+            "--aa {} at {}x{} needs a {gw}x{gh} G-buffer but the adapter's textures allow {max2d}: lower --aa or --size",
+            c.aa,
+            c.width,
+            c.height
+        );
+    }
     check_size(
         limits,
-        "the HDR frame",
-        bytes::<[f32; 4]>(c.width as u64 * c.height as u64),
-        "lower --size",
+        &format!("the HDR frame of {gw}x{gh} sub-samples (--aa {})", c.aa),
+        bytes::<[f32; 4]>(gw * gh),
+        "lower --size or --aa",
     )?;
     Ok(())
 }
@@ -249,11 +285,16 @@ impl Renderer {
             storage,
         );
         let points = ism::point_set(points_frame, c.num_points as usize, c.seed);
-        let points_buf = gpu.buffer(
-            "ism points",
-            bytes::<ism::Point>(points.len() as u64),
-            storage,
-        );
+        // The point set, then room for every slot's near-field points.
+        let near_dirs = ism::near_directions(ism::near_grid(c.ism_size, c.pull_levels));
+        let points_len = points.len() as u64 + c.max_vpls as u64 * near_dirs.len() as u64;
+        check_size(
+            &gpu.limits,
+            "the ISM points",
+            bytes::<ism::Point>(points_len),
+            "lower --vpls or --ism-points",
+        )?;
+        let points_buf = gpu.buffer("ism points", bytes::<ism::Point>(points_len), storage);
         gpu.queue
             .write_buffer(&points_buf, 0, bytemuck::cast_slice(&points));
         let offsets: Vec<u32> = (0..c.max_vpls)
@@ -264,8 +305,11 @@ impl Renderer {
             bytes::<[u32; 2]>(c.max_vpls as u64),
             storage,
         );
-        let pixels = c.width as u64 * c.height as u64;
-        let gbuffer = GBuffer::new(&gpu, c.width, c.height);
+        // Every pass before `resolve` runs on the sub-sample grid.
+        let (gw, gh) = c.grid();
+        let pixels = gw as u64 * gh as u64;
+        let out_pixels = c.width as u64 * c.height as u64;
+        let gbuffer = GBuffer::new(&gpu, c.width, c.height, c.aa);
         let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples);
         let direct = Direct::new(
             &gpu,
@@ -304,10 +348,18 @@ impl Renderer {
             &params,
             &tris,
             &gbuffer.view,
-            &direct.output,
-            indirect,
+            (&direct.output, indirect),
             pixels,
+            c.aa > 1,
         );
+        let resolve = (c.aa > 1).then(|| {
+            Resolve::new(
+                &gpu,
+                &params,
+                (&compose.hdr, &direct.output, &compose.indirect_ss),
+                out_pixels,
+            )
+        });
         let h = crate::math::mix64(c.seed ^ 0x1e7e_a5ed_0000_0009);
         let interleave_shift = (
             (h % c.interleave as u64) as u32,
@@ -315,14 +367,16 @@ impl Renderer {
         );
         let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
         let staging = Staging {
-            hdr: gpu.buffer("hdr readback", bytes::<[f32; 4]>(pixels), read),
-            ldr: gpu.buffer("ldr readback", bytes::<u32>(pixels), read),
-            direct: gpu.buffer("direct readback", bytes::<[f32; 4]>(pixels), read),
-            indirect: gpu.buffer("indirect readback", bytes::<[f32; 4]>(pixels), read),
+            hdr: gpu.buffer("hdr readback", bytes::<[f32; 4]>(out_pixels), read),
+            ldr: gpu.buffer("ldr readback", bytes::<u32>(out_pixels), read),
+            direct: gpu.buffer("direct readback", bytes::<[f32; 4]>(out_pixels), read),
+            indirect: gpu.buffer("indirect readback", bytes::<[f32; 4]>(out_pixels), read),
         };
         let timestamps = has_timestamps(&gpu).then(|| Timestamps::new(&gpu, PASSES.len() as u32));
         let profiling = Profiling::default_for(&gpu);
         Ok(Renderer {
+            near_dirs,
+            points: points_buf.clone(),
             gpu,
             config,
             profiling,
@@ -346,12 +400,36 @@ impl Renderer {
             interleave,
             interleave_shift,
             compose,
+            resolve,
         })
     }
 
     /// Checks that the frame fits what the renderer was built for.
+    /// The near-field ray directions each VPL's points are cast along, in its frame (z along
+    /// its normal): what [`GpuFrame::near`] holds for each VPL.
+    pub fn near_directions(&self) -> &[Vec3] {
+        &self.near_dirs
+    }
+
+    /// Near-field points per slot this frame: all of [`Self::near_directions`], or none.
+    fn near_points(&self, input: &GpuFrame) -> u32 {
+        if input.near.is_empty() {
+            0
+        } else {
+            self.near_dirs.len() as u32
+        }
+    }
+
     fn check_input(&self, input: &GpuFrame) -> Result<()> {
         let (f, c) = (input.frame, &self.config);
+        if !input.near.is_empty() && input.near.len() != input.vpls.len() * self.near_dirs.len() {
+            bail!(
+                "{} near-field points for {} VPLs: there must be {} for each, or none",
+                input.near.len(),
+                input.vpls.len(),
+                self.near_dirs.len()
+            );
+        }
         if f.tris.len() != self.tri_count {
             bail!(
                 "the frame has {} triangles but the renderer was built for {}",
@@ -463,11 +541,19 @@ impl Renderer {
         let f = input.frame;
         let still = self.upload_geometry(f);
         let (changed, vpls_uploaded) = self.upload_vpls(input.vpls, still);
+        if !changed.is_empty() && !input.near.is_empty() {
+            self.gpu.queue.write_buffer(
+                &self.points,
+                bytes::<ism::Point>(self.config.num_points as u64),
+                bytemuck::cast_slice(input.near),
+            );
+        }
         let lights_kept = self.upload_lights(input.lights);
         let c = &self.config;
+        let (gw, gh) = c.grid();
         let params = Params {
-            width: c.width,
-            height: c.height,
+            width: gw,
+            height: gh,
             num_vpls: input.vpls.len() as u32,
             ism_size: c.ism_size,
             points_per_vpl: c.points_per_vpl,
@@ -486,7 +572,11 @@ impl Renderer {
             interleave: c.interleave,
             shift_x: self.interleave_shift.0 % c.interleave,
             shift_y: self.interleave_shift.1 % c.interleave,
-            _pad: 0,
+            aa: c.aa,
+            near_points: self.near_points(input),
+            _pad0: 0,
+            _pad1: 0,
+            _pad2: 0,
         };
         self.gpu
             .queue
@@ -514,7 +604,10 @@ impl Renderer {
     ) -> Result<bool> {
         let (f, c) = (input.frame, self.config.clone());
         let count = (self.tri_count * 3) as u32;
-        // gbuffer: vertices -> G-buffer (position, triangle) per pixel.
+        // The passes up to compose run on the sub-sample grid (aa x aa tiles of the output
+        // size, each sampling every pixel at one offset; the output itself with aa = 1).
+        let (gw, gh) = c.grid();
+        // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample.
         let view_proj = f
             .camera
             .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
@@ -534,25 +627,40 @@ impl Renderer {
         );
         rec.end_pass()?;
         // direct: G-buffer, triangles, emitter samples, hemicubes -> direct light.
-        self.direct.encode(&mut rec.enc, c.width, c.height);
+        self.direct.encode(&mut rec.enc, gw, gh);
         rec.end_pass()?;
         // ism_splat: point set, VPLs, changed slots -> ISM atlas tiles of those slots.
-        self.ism
-            .encode_splat(&mut rec.enc, changed_slots, c.points_per_vpl);
+        self.ism.encode_splat(
+            &mut rec.enc,
+            changed_slots,
+            c.points_per_vpl + self.near_points(input),
+        );
         rec.end_pass()?;
         // ism_pullpush: ISM atlas -> hole-filled pyramid of the changed slots.
         self.ism.encode_pull_push(&mut rec.enc, changed_slots);
         rec.end_pass()?;
-        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light.
-        self.gather.encode(&mut rec.enc, c.width, c.height);
+        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light; supersampled, at
+        // one sample per pixel (tile 0 of the grid), the albedo left to compose.
+        let (iw, ih) = if c.aa > 1 {
+            (c.width, c.height)
+        } else {
+            (gw, gh)
+        };
+        self.gather.encode(&mut rec.enc, iw, ih);
         rec.end_pass()?;
         // interleave: G-buffer, triangles, subset sums -> filtered indirect light (N > 1).
         if let Some(f) = &self.interleave {
-            f.encode(&mut rec.enc, c.width, c.height);
+            f.encode(&mut rec.enc, iw, ih);
         }
         rec.end_pass()?;
-        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview.
-        self.compose.encode(&mut rec.enc, c.width, c.height);
+        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview
+        // (supersampled: each sub-sample's indirect light from its pixel's, no preview).
+        self.compose.encode(&mut rec.enc, gw, gh);
+        rec.end_pass()?;
+        // resolve: sub-samples of the frame and its parts -> box-filtered pixels (aa > 1).
+        if let Some(r) = &self.resolve {
+            r.encode(&mut rec.enc, c.width, c.height);
+        }
         rec.end_pass()?;
         Ok(!drawn && !input.lights.is_empty())
     }
@@ -571,14 +679,24 @@ impl Renderer {
         let pixels = c.width as u64 * c.height as u64;
         let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
         let st = &self.staging;
-        let mut reads = vec![(&self.compose.hdr, &st.hdr, hdr_bytes)];
-        reads.push((&self.compose.ldr, &st.ldr, ldr_bytes));
+        // The frame and its parts at the output size: resolved, or (aa = 1) as composed.
+        let indirect = self
+            .interleave
+            .as_ref()
+            .map_or(&self.gather.output, |f| &f.output);
+        let (hdr, ldr, direct, indirect) = match &self.resolve {
+            Some(r) => (&r.hdr, &r.ldr, &r.direct, &r.indirect),
+            None => (
+                &self.compose.hdr,
+                &self.compose.ldr,
+                &self.direct.output,
+                indirect,
+            ),
+        };
+        let mut reads = vec![(hdr, &st.hdr, hdr_bytes)];
+        reads.push((ldr, &st.ldr, ldr_bytes));
         if components {
-            reads.push((&self.direct.output, &st.direct, hdr_bytes));
-            let indirect = self
-                .interleave
-                .as_ref()
-                .map_or(&self.gather.output, |f| &f.output);
+            reads.push((direct, &st.direct, hdr_bytes));
             reads.push((indirect, &st.indirect, hdr_bytes));
         }
         for &(src, dst, size) in &reads {
@@ -659,5 +777,60 @@ impl Renderer {
             profiling: self.profiling,
             reused: reuse,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(width: u32, height: u32, aa: u32) -> RendererConfig {
+        crate::config::Render {
+            sequence: crate::config::Sequence {
+                size: crate::config::Size { width, height },
+                ..Default::default()
+            },
+            quality: crate::config::Quality {
+                aa,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+        .renderer_config()
+    }
+
+    /// The supersampled buffers are checked against the adapter: a grid past its textures or
+    /// an HDR frame past its buffers is refused with the flags to change, before anything is
+    /// allocated.
+    #[test]
+    fn supersampled_sizes_are_checked_with_the_flags_named() {
+        let limits = wgpu::Limits::downlevel_defaults(); // 2048 texels, 128 MiB buffers
+        check_config(&config(1024, 1024, 2), &limits).unwrap();
+        let e = check_config(&config(1024, 1024, 3), &limits)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--aa 3") && e.contains("3072x3072") && e.contains("lower --aa or --size"),
+            "{e}"
+        );
+        // 2048^2 sub-samples of 16 bytes fit 128 MiB buffers exactly; a smaller limit refuses.
+        let small = wgpu::Limits {
+            max_storage_buffer_binding_size: 32 << 20,
+            ..limits.clone()
+        };
+        let e = check_config(&config(1024, 1024, 2), &small)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--aa 2") && e.contains("lower --size or --aa"),
+            "{e}"
+        );
+        check_config(&config(512, 512, 2), &small).unwrap();
+        for bad in [0, 9] {
+            let e = check_config(&config(64, 64, bad), &limits)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("--aa") && e.contains("1 to 8"), "{e}");
+        }
     }
 }

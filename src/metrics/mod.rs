@@ -3,6 +3,7 @@
 
 use crate::image::Hdr;
 use crate::math::luminance;
+pub mod floor;
 pub mod warp;
 
 use anyhow::{bail, Result};

@@ -24,14 +24,45 @@ fn register_font() {
 pub struct Series {
     pub label: String,
     pub points: Vec<(f64, f64)>,
+    /// Text written beside each point (a swept knob's value), or empty.
+    pub tags: Vec<String>,
+}
+
+impl Series {
+    pub fn new(label: String, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            label,
+            points,
+            tags: Vec::new(),
+        }
+    }
 }
 
 /// What kind of chart.
+#[derive(Clone, Copy)]
 pub enum Kind {
     /// Lines through each series' points.
     Lines,
     /// One marker per point, coloured by its series.
     Scatter,
+    /// Lines through each series' points with a marker (and its tag) at each point.
+    Curves,
+}
+
+/// A reference mark drawn in grey under the data, with its own legend entry: the floor of a
+/// measurement.
+pub enum Shape {
+    /// A band from 0 up to `y`, edged by a dashed line.
+    BandBelow(f64),
+    /// A dashed vertical line at `x`.
+    VLine(f64),
+    /// A dashed line through the points.
+    Dashed(Vec<(f64, f64)>),
+}
+
+pub struct Guide {
+    pub label: String,
+    pub shape: Shape,
 }
 
 pub struct Chart<'a> {
@@ -40,6 +71,10 @@ pub struct Chart<'a> {
     pub y: &'a str,
     pub kind: Kind,
     pub series: &'a [Series],
+    pub guides: &'a [Guide],
+    /// A logarithmic x axis when the positive x values span more than 8x (points at x <= 0
+    /// are then left out).
+    pub log_x: bool,
 }
 
 fn color(i: usize) -> RGBColor {
@@ -91,33 +126,108 @@ fn finite(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
         .filter(|p| p.0.is_finite() && p.1.is_finite())
 }
 
-/// Axis ranges of the series, from 0 for non-negative data; `headroom` is the fraction of the
-/// y span added on top (room for the legend).
-fn bounds(series: &[Series], headroom: f64) -> ((f64, f64), (f64, f64)) {
+/// Axis ranges of the series and guides, from 0 for non-negative data; `headroom` is the
+/// fraction of the y span added on top (room for the legend).
+/// (`log`: the x values are log10s, so the x axis does not start at 0.)
+fn bounds(
+    series: &[Series],
+    guides: &[Guide],
+    headroom: f64,
+    log: bool,
+) -> ((f64, f64), (f64, f64)) {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
     );
+    let mut xs: Vec<f64> = Vec::new();
+    let mut ys: Vec<f64> = Vec::new();
     for p in series.iter().flat_map(finite) {
-        x0 = x0.min(p.0);
-        x1 = x1.max(p.0);
-        y0 = y0.min(p.1);
-        y1 = y1.max(p.1);
+        xs.push(p.0);
+        ys.push(p.1);
     }
-    if !x0.is_finite() {
+    for g in guides {
+        match &g.shape {
+            Shape::BandBelow(y) => ys.push(*y),
+            Shape::VLine(x) => xs.push(*x),
+            Shape::Dashed(pts) => {
+                for p in pts {
+                    xs.push(p.0);
+                    ys.push(p.1);
+                }
+            }
+        }
+    }
+    for &x in xs.iter().filter(|v| v.is_finite()) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+    }
+    for &y in ys.iter().filter(|v| v.is_finite()) {
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if !x0.is_finite() || !y0.is_finite() {
         return ((0.0, 1.0), (0.0, 1.0));
     }
-    let pad = |a: f64, b: f64, top: f64| {
-        let lo = if a >= 0.0 { 0.0 } else { a - 0.05 * (b - a) };
+    let pad = |a: f64, b: f64, top: f64, from_zero: bool| {
+        let lo = if a >= 0.0 && from_zero {
+            0.0
+        } else {
+            a - 0.05 * (b - a)
+        };
         let d = (b - lo).max(1e-9 * b.abs().max(1.0));
         (lo, b + top * d)
     };
-    (pad(x0, x1, 0.08), pad(y0, y1, headroom))
+    (pad(x0, x1, 0.08, !log), pad(y0, y1, headroom, true))
 }
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart) -> Result<()>
+/// `c` with every x replaced by its log10 when it asks for a log axis and its x values span
+/// more than 8x; None otherwise.
+fn log_x(c: &Chart) -> Option<(Vec<Series>, Vec<Guide>)> {
+    if !c.log_x {
+        return None;
+    }
+    let xs: Vec<f64> = c
+        .series
+        .iter()
+        .flat_map(finite)
+        .map(|p| p.0)
+        .filter(|&x| x > 0.0)
+        .collect();
+    let (lo, hi) = xs
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    if xs.is_empty() || hi < 8.0 * lo {
+        return None;
+    }
+    let t = |x: f64| if x > 0.0 { x.log10() } else { f64::NAN };
+    let series = c
+        .series
+        .iter()
+        .map(|s| Series {
+            label: s.label.clone(),
+            points: s.points.iter().map(|p| (t(p.0), p.1)).collect(),
+            tags: s.tags.clone(),
+        })
+        .collect();
+    let guides = c
+        .guides
+        .iter()
+        .map(|g| Guide {
+            label: g.label.clone(),
+            shape: match &g.shape {
+                Shape::BandBelow(y) => Shape::BandBelow(*y),
+                Shape::VLine(x) => Shape::VLine(t(*x)),
+                Shape::Dashed(pts) => Shape::Dashed(pts.iter().map(|p| (t(p.0), p.1)).collect()),
+            },
+        })
+        .collect();
+    Some((series, guides))
+}
+
+/// Draws `c`; `log` says its x values are log10s (labelled as the values).
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart, log: bool) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
@@ -125,12 +235,19 @@ where
     root.fill(&WHITE).map_err(e)?;
     // The legend sits top right above the data: for scatter charts that corner (slow and
     // inaccurate) rarely has a run, and it gets more headroom.
-    let headroom = if matches!(c.kind, Kind::Scatter) {
-        0.6
-    } else {
+    let headroom = if matches!(c.kind, Kind::Lines) {
         0.25
+    } else {
+        0.6
     };
-    let ((x0, x1), (y0, y1)) = bounds(c.series, headroom);
+    let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom, log);
+    let x_label = |v: &f64| {
+        if log {
+            short(10f64.powf(*v))
+        } else {
+            short(*v)
+        }
+    };
     let mut chart = ChartBuilder::on(&root)
         .caption(c.title, ("sans-serif", 20))
         .margin(12)
@@ -140,16 +257,53 @@ where
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc(c.x)
+        .x_desc(if log {
+            format!("{} (log scale)", c.x)
+        } else {
+            c.x.to_string()
+        })
         .y_desc(c.y)
         .x_labels(10)
         .y_labels(10)
-        .x_label_formatter(&|v| short(*v))
+        .x_label_formatter(&x_label)
         .y_label_formatter(&|v| short(*v))
         .label_style(("sans-serif", 13))
         .axis_desc_style(("sans-serif", 15))
         .draw()
         .map_err(e)?;
+    // Guides first, under the data.
+    let grey = RGBColor(110, 110, 110);
+    for g in c.guides {
+        let style = grey.stroke_width(2);
+        match &g.shape {
+            Shape::BandBelow(y) => {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x0, 0.0f64.max(y0)), (x1, *y)],
+                        grey.mix(0.18).filled(),
+                    )))
+                    .map_err(e)?;
+                chart
+                    .draw_series(DashedLineSeries::new([(x0, *y), (x1, *y)], 8, 5, style))
+                    .map_err(e)?
+            }
+            Shape::VLine(x) => chart
+                .draw_series(DashedLineSeries::new([(*x, y0), (*x, y1)], 8, 5, style))
+                .map_err(e)?,
+            Shape::Dashed(pts) => chart
+                .draw_series(DashedLineSeries::new(
+                    pts.iter()
+                        .copied()
+                        .filter(|p| p.0.is_finite() && p.1.is_finite()),
+                    8,
+                    5,
+                    style,
+                ))
+                .map_err(e)?,
+        }
+        .label(g.label.clone())
+        .legend(move |(x, y)| PathElement::new([(x, y), (x + 14, y)], grey.stroke_width(2)));
+    }
     for (i, s) in c.series.iter().enumerate() {
         let col = color(i);
         match c.kind {
@@ -159,6 +313,27 @@ where
             Kind::Scatter => chart
                 .draw_series(finite(s).map(|p| Circle::new(p, 6, col.filled())))
                 .map_err(e)?,
+            Kind::Curves => {
+                chart
+                    .draw_series(finite(s).map(|p| Circle::new(p, 4, col.filled())))
+                    .map_err(e)?;
+                let tags = s
+                    .points
+                    .iter()
+                    .zip(&s.tags)
+                    .filter(|(p, _)| p.0.is_finite() && p.1.is_finite())
+                    .map(|(p, t)| {
+                        Text::new(
+                            t.clone(),
+                            *p,
+                            ("sans-serif", 11).into_font().color(&col.mix(0.9)),
+                        )
+                    });
+                chart.draw_series(tags).map_err(e)?;
+                chart
+                    .draw_series(LineSeries::new(finite(s), col.stroke_width(2)))
+                    .map_err(e)?
+            }
         }
         .label(s.label.clone())
         .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
@@ -178,15 +353,30 @@ where
 /// Draws a chart as SVG text and as an RGB PNG image.
 pub fn render(c: &Chart) -> Result<(String, image::RgbImage)> {
     register_font();
+    let logged = log_x(c);
+    let (c, log) = match &logged {
+        Some((series, guides)) => (
+            &Chart {
+                series,
+                guides,
+                log_x: false,
+                ..*c
+            },
+            true,
+        ),
+        None => (c, false),
+    };
     let mut svg = String::new();
     draw(
         SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area(),
         c,
+        log,
     )?;
     let mut buf = vec![0u8; (W * H * 3) as usize];
     draw(
         BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area(),
         c,
+        log,
     )?;
     let png = image::RgbImage::from_raw(W, H, buf).ok_or_else(|| anyhow!("chart buffer size"))?;
     Ok((svg, png))

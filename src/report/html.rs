@@ -11,8 +11,18 @@ pub struct Row {
     pub rel_mse: f64,
     pub flip: f64,
     pub flicker: f64,
+    /// Motion-compensated flicker F1.
+    pub warped: f64,
     pub replaced: f64,
     pub acceptance: Option<f64>,
+}
+
+/// The reference's own noise: what a perfect renderer would measure.
+pub struct FloorRow {
+    pub label: String,
+    pub rel_mse: f64,
+    pub flicker: f64,
+    pub warped: Option<f64>,
 }
 
 /// An animation (and its error animation) shown side by side.
@@ -36,11 +46,13 @@ fn gif_uri(bytes: &[u8]) -> String {
     )
 }
 
-/// The page. `charts` are (title, SVG text); `notes` are lines of context (scene, adapter...).
+/// The page. `charts` are (title, SVG text); `notes` are lines of context (scene, adapter...);
+/// `floor` is the last row of the table.
 pub fn page(
     title: &str,
     notes: &[String],
     rows: &[Row],
+    floor: Option<&FloorRow>,
     charts: &[(String, String)],
     clips: &[Clip],
 ) -> String {
@@ -57,20 +69,36 @@ th{background:#eee}td:first-child{text-align:left}.charts{display:flex;flex-wrap
     for n in notes {
         h += &format!("<li>{}</li>\n", esc(n));
     }
-    h += "</ul>\n<h2>Summary</h2>\n<table><tr><th>run</th><th>s / frame</th><th>relMSE</th><th>FLIP</th><th>flicker F1</th><th>VPLs replaced / frame</th><th>MH acceptance</th></tr>\n";
+    h += "</ul>\n<h2>Summary</h2>\n<table><tr><th>run</th><th>s / frame</th><th>relMSE</th><th>FLIP</th><th>flicker F1</th><th>warped F1</th><th>VPLs replaced / frame</th><th>MH acceptance</th></tr>\n";
     for r in rows {
         h += &format!(
-            "<tr><td>{}</td><td>{:.3}</td><td>{:.5}</td><td>{:.4}</td><td>{:.5}</td><td>{:.3}</td><td>{}</td></tr>\n",
+            "<tr><td>{}</td><td>{:.3}</td><td>{:.5}</td><td>{:.4}</td><td>{:.5}</td><td>{:.5}</td><td>{:.3}</td><td>{}</td></tr>\n",
             esc(&r.label),
             r.seconds,
             r.rel_mse,
             r.flip,
             r.flicker,
+            r.warped,
             r.replaced,
             r.acceptance.map(|a| format!("{a:.3}")).unwrap_or_else(|| "-".into())
         );
     }
-    h += "</table>\n<h2>Charts</h2>\n<div class=\"charts\">\n";
+    if let Some(f) = floor {
+        h += &format!(
+            "<tr class=\"floor\"><td><i>{}</i></td><td>-</td><td><i>{:.5}</i></td><td>-</td><td><i>{:.5}</i></td><td><i>{}</i></td><td>-</td><td>-</td></tr>\n",
+            esc(&f.label),
+            f.rel_mse,
+            f.flicker,
+            f.warped.map(|w| format!("{w:.5}")).unwrap_or_else(|| "-".into())
+        );
+    }
+    h += "</table>\n";
+    if floor.is_some() {
+        h +=
+            "<p>The last row is the reference's own noise: what a perfect renderer would measure. \
+A figure near it says more about the reference than about the run (see docs/math.md).</p>\n";
+    }
+    h += "<h2>Charts</h2>\n<div class=\"charts\">\n";
     for (t, svg) in charts {
         h += &format!(
             "<figure class=\"chart\" title=\"{}\">{}</figure>\n",

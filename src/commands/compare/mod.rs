@@ -1,8 +1,10 @@
-//! `irad compare`: samplers x VPL counts on one animation, against a cached reference:
-//! metrics.csv/json, charts (SVG and PNG) and a self-contained report.html. In four steps:
-//! [`plan`] (scene, frames, every run's settings checked on the one device),
-//! [`reference_cache`] (the path-traced frames, reused when their settings match), [`runs`]
-//! (each sampler x VPL count rendered and measured) and [`outputs`] (tables, charts, page).
+//! `irad compare`: samplers x VPL counts (and swept sampler knobs) on one animation, against a
+//! cached reference: metrics.csv/json, charts (SVG and PNG) and a self-contained report.html.
+//! In four steps: [`plan`] (scene, frames, every run's settings checked on the one device),
+//! [`reference_cache`] (the path-traced frames, two independent halves reused when their
+//! settings match, whose difference gives the reference's own noise floor), [`runs`] (each
+//! run rendered and measured, plain and warped flicker) and [`outputs`] (tables, charts with
+//! the floor drawn on them, page).
 
 pub mod outputs;
 pub mod plan;
@@ -17,7 +19,15 @@ pub fn compare(cfg: &config::Compare) -> Result<()> {
     let plan = plan::Plan::new(cfg)?;
     let pb = crate::report::progress(plan.work_units(), "compare");
     let reference = reference_cache::load_or_render(&plan, &|| pb.inc(1))?;
-    let results = runs::run_all(&plan, &reference, &|| pb.inc(1))?;
+    let motion = plan.motion();
+    let floor = crate::metrics::floor::floor(
+        &plan.numbers,
+        &reference.frames,
+        [&reference.halves[0], &reference.halves[1]],
+        reference.spp,
+        Some(&motion),
+    )?;
+    let results = runs::run_all(&plan, &reference.frames, &motion, &|| pb.inc(1))?;
     pb.finish_and_clear();
-    outputs::write(&plan, &reference, &results)
+    outputs::write(&plan, &reference.frames, &floor, &results)
 }

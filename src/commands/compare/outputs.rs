@@ -4,7 +4,9 @@
 use super::plan::Plan;
 use super::runs::{Results, RunRecord};
 use crate::image::{write_bytes, Hdr};
-use crate::report::charts::{self, Chart, Kind, Series};
+use crate::metrics::floor::Floor;
+use crate::radiosity::Method;
+use crate::report::charts::{self, Chart, Guide, Kind, Series, Shape};
 use crate::report::html;
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -68,15 +70,22 @@ fn clips(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<Vec<html::
 fn write_csv(plan: &Plan, results: &Results) -> Result<()> {
     let spec = plan.spec.as_str();
     let mut csv = String::from(
-        "scene,method,sampler,vpls,frame,seconds,rel_mse,rmse,bias,flip,flicker,replaced,acceptance\n",
+        "scene,method,sampler,vpls,knob,knob_value,frame,seconds,rel_mse,rmse,bias,flip,flicker,warped_flicker,replaced,acceptance\n",
     );
     for r in &results.records {
         for (i, fm) in r.metrics.frames.iter().enumerate() {
+            let warped = i
+                .checked_sub(1)
+                .and_then(|j| r.warped.frames.get(j))
+                .map(|w| format!("{:.8}", w.0))
+                .unwrap_or_default();
             csv += &format!(
-                "{spec},{},{},{},{},{:.6},{:.8},{:.8},{:.8},{:.6},{},{:.4},{}\n",
+                "{spec},{},{},{},{},{},{},{:.6},{:.8},{:.8},{:.8},{:.6},{},{warped},{:.4},{}\n",
                 r.method.name(),
                 r.sampler,
                 r.vpls,
+                r.knob.map(|k| k.to_string()).unwrap_or_default(),
+                r.knob_value.map(|v| v.to_string()).unwrap_or_default(),
                 fm.frame,
                 r.seconds[i],
                 fm.error.rel_mse,
@@ -96,55 +105,202 @@ fn write_csv(plan: &Plan, results: &Results) -> Result<()> {
 }
 
 /// What the page, metrics.json and stdout say about the comparison's setting.
-fn notes(plan: &Plan, results: &Results) -> Vec<String> {
+fn notes(plan: &Plan, floor: &Floor, results: &Results) -> Vec<String> {
     let cfg = &plan.cfg;
     let (spec, frames, adapter) = (&plan.spec, plan.frames, &results.adapter);
-    vec![
+    let sweeps: Vec<String> = cfg.sweep.iter().map(|s| s.to_string()).collect();
+    let mut notes = vec![
         format!("scene {spec}, frames {}..{} at {} fps, {}", frames.start, frames.end, cfg.sequence.fps, cfg.sequence.size),
-        format!("reference: CPU path tracer, {} spp, seed {}", cfg.spp, cfg.sequence.seed),
+        format!("reference: CPU path tracer, {} spp (two independent halves of {} and {} spp), seed {}", cfg.spp, floor.spp[0], floor.spp[1], cfg.sequence.seed),
+        format!(
+            "reference noise floor (what a perfect renderer would measure; from the halves' difference): flicker F1 {:.5}, warped F1 {}, relMSE {:.5}",
+            floor.flicker_f1,
+            floor.warped_f1.map(|w| format!("{w:.5}")).unwrap_or_else(|| "-".into()),
+            floor.rel_mse
+        ),
         format!("adapter: {adapter}; CPU threads: {}", rayon::current_num_threads()),
-        format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference)", cfg.render.mh_rate, cfg.render.mh_escape),
-    ]
+        format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference); warped F1 reads e_(t-1) where the pixel's surface was (disoccluded pixels left out)", cfg.render.mh_rate, cfg.render.mh_escape),
+    ];
+    if !sweeps.is_empty() {
+        notes.push(format!("sweeps: {}", sweeps.join("; ")));
+    }
+    notes
+}
+
+/// A curve of the flicker-against-error charts: the runs of one sampler with its knob swept
+/// (at one VPL count), or over --vpls when nothing is swept; a classical method is one point.
+struct Curve {
+    label: String,
+    /// (knob value or VPL count, record index).
+    runs: Vec<(f64, usize)>,
+}
+
+fn curves(results: &Results) -> Vec<Curve> {
+    let mut keys: Vec<(String, Curve)> = Vec::new();
+    for (i, r) in results.records.iter().enumerate() {
+        let (key, label, x) = match (r.method, r.knob, r.knob_value) {
+            (Method::Instant, Some(k), Some(v)) => (
+                format!("{} {} {k}", r.sampler, r.vpls),
+                format!("{} {}", r.sampler, r.vpls),
+                v,
+            ),
+            (Method::Instant, _, _) => {
+                (r.sampler.to_string(), r.sampler.to_string(), r.vpls as f64)
+            }
+            (m, _, _) => (m.name().to_string(), m.name().to_string(), 0.0),
+        };
+        match keys.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, c)) => c.runs.push((x, i)),
+            None => keys.push((
+                key,
+                Curve {
+                    label,
+                    runs: vec![(x, i)],
+                },
+            )),
+        }
+    }
+    keys.into_iter()
+        .map(|(_, mut c)| {
+            c.runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (lo, hi) = (c.runs[0].0, c.runs[c.runs.len() - 1].0);
+            let r = &results.records[c.runs[0].1];
+            let what = match r.knob {
+                Some(k) => Some(k.to_string()),
+                None if r.method == Method::Instant => Some("VPLs".to_string()),
+                None => None,
+            };
+            if let Some(what) = what {
+                c.label = match (r.knob, c.runs.len()) {
+                    (Some(_), 1) | (None, 1) => format!("{} ({what} {lo})", c.label),
+                    _ => format!("{} ({what} {lo}..{hi})", c.label),
+                };
+            }
+            c
+        })
+        .collect()
 }
 
 /// The charts, written as SVG and PNG under charts/; returns (title, SVG) for the page.
-fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>> {
+fn write_charts(plan: &Plan, floor: &Floor, results: &Results) -> Result<Vec<(String, String)>> {
     let cfg = &plan.cfg;
     let numbers = &plan.numbers;
     let per_frame = |f: &dyn Fn(&RunRecord, usize) -> Option<f64>| -> Vec<Series> {
         results
             .records
             .iter()
-            .map(|r| Series {
-                label: r.label(),
-                points: numbers
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(i, &n)| f(r, i).map(|y| (n as f64, y)))
-                    .collect(),
+            .map(|r| {
+                Series::new(
+                    r.label(),
+                    numbers
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(i, &n)| f(r, i).map(|y| (n as f64, y)))
+                        .collect(),
+                )
             })
             .collect()
     };
-    let scatter: Vec<Series> = results
-        .records
-        .iter()
-        .map(|r| Series {
-            label: r.label(),
-            points: vec![(r.mean_seconds, r.metrics.mean_rel_mse)],
-        })
-        .collect();
-    let flicker_scatter: Vec<Series> = results
-        .records
-        .iter()
-        .map(|r| Series {
-            label: r.label(),
-            points: vec![(r.mean_seconds, r.metrics.flicker_f1.max(1e-9))],
-        })
-        .collect();
+    let one_point = |f: &dyn Fn(&RunRecord) -> (f64, f64)| -> Vec<Series> {
+        results
+            .records
+            .iter()
+            .map(|r| Series::new(r.label(), vec![f(r)]))
+            .collect()
+    };
+    let scatter = one_point(&|r| (r.mean_seconds, r.metrics.mean_rel_mse));
+    let flicker_scatter = one_point(&|r| (r.mean_seconds, r.metrics.flicker_f1.max(1e-9)));
     let flicker_lines = per_frame(&|r, i| r.metrics.frames[i].flicker);
+    let warped_lines = per_frame(&|r, i| {
+        i.checked_sub(1)
+            .and_then(|j| r.warped.frames.get(j))
+            .map(|w| w.0)
+    });
     let relmse_lines = per_frame(&|r, i| Some(r.metrics.frames[i].error.rel_mse));
     let replaced_lines = per_frame(&|r, i| Some(r.replaced[i] as f64));
+    let curves = curves(results);
+    let against_error = |y: &dyn Fn(&RunRecord) -> f64| -> Vec<Series> {
+        curves
+            .iter()
+            .map(|c| {
+                let recs: Vec<&RunRecord> =
+                    c.runs.iter().map(|&(_, i)| &results.records[i]).collect();
+                Series {
+                    label: c.label.clone(),
+                    points: recs
+                        .iter()
+                        .map(|r| (r.metrics.mean_rel_mse, y(r)))
+                        .collect(),
+                    tags: if c.runs.len() > 1 {
+                        c.runs.iter().map(|(x, _)| x.to_string()).collect()
+                    } else {
+                        Vec::new()
+                    },
+                }
+            })
+            .collect()
+    };
+    let flicker_error = against_error(&|r| r.metrics.flicker_f1);
+    let warped_error = against_error(&|r| r.warped.f1);
+
+    let spp = format!("{}+{} spp", floor.spp[0], floor.spp[1]);
+    let band = |what: &str, y: f64| Guide {
+        label: format!("reference noise floor: {what} {y:.2e} ({spp} halves)"),
+        shape: Shape::BandBelow(y),
+    };
+    let relmse_line = Guide {
+        label: format!("reference noise floor: relMSE {:.2e}", floor.rel_mse),
+        shape: Shape::VLine(floor.rel_mse),
+    };
+    let per_frame_floor = |f: &dyn Fn(&crate::metrics::floor::FloorFrame) -> Option<f64>| Guide {
+        label: format!("reference noise floor ({spp} halves)"),
+        shape: Shape::Dashed(
+            floor
+                .frames
+                .iter()
+                .filter_map(|fr| f(fr).map(|y| (fr.frame as f64, y)))
+                .collect(),
+        ),
+    };
+    let g_relmse = [band("relMSE", floor.rel_mse)];
+    let g_f1 = [band("F1", floor.flicker_f1)];
+    let g_flicker_frames = [per_frame_floor(&|fr| fr.flicker)];
+    let g_warped_frames = [per_frame_floor(&|fr| fr.warped_flicker)];
+    let g_relmse_frames = [per_frame_floor(&|fr| Some(fr.rel_mse))];
+    let g_fe = [band("F1", floor.flicker_f1), relmse_line];
+    let warped_floor = floor.warped_f1.unwrap_or(floor.flicker_f1);
+    let g_we = [
+        band("warped F1", warped_floor),
+        Guide {
+            label: format!("reference noise floor: relMSE {:.2e}", floor.rel_mse),
+            shape: Shape::VLine(floor.rel_mse),
+        },
+    ];
     let specs: Vec<(&str, Chart)> = vec![
+        (
+            "flicker_error",
+            Chart {
+                title: "Flicker against error (a curve per sampler, its knob swept)",
+                x: "mean relMSE",
+                y: "flicker F1",
+                kind: Kind::Curves,
+                series: &flicker_error,
+                guides: &g_fe,
+                log_x: true,
+            },
+        ),
+        (
+            "warped_flicker_error",
+            Chart {
+                title: "Warped flicker against error (camera and objects' motion compensated)",
+                x: "mean relMSE",
+                y: "warped flicker F1",
+                kind: Kind::Curves,
+                series: &warped_error,
+                guides: &g_we,
+                log_x: true,
+            },
+        ),
         (
             "speed_accuracy",
             Chart {
@@ -153,6 +309,8 @@ fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>>
                 y: "mean relMSE",
                 kind: Kind::Scatter,
                 series: &scatter,
+                guides: &g_relmse,
+                log_x: false,
             },
         ),
         (
@@ -163,6 +321,8 @@ fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>>
                 y: "flicker F1",
                 kind: Kind::Scatter,
                 series: &flicker_scatter,
+                guides: &g_f1,
+                log_x: false,
             },
         ),
         (
@@ -173,6 +333,20 @@ fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>>
                 y: "mean |e_t - e_(t-1)|",
                 kind: Kind::Lines,
                 series: &flicker_lines,
+                guides: &g_flicker_frames,
+                log_x: false,
+            },
+        ),
+        (
+            "warped_flicker",
+            Chart {
+                title: "Warped flicker per frame",
+                x: "frame",
+                y: "mean |e_t - warped e_(t-1)|",
+                kind: Kind::Lines,
+                series: &warped_lines,
+                guides: &g_warped_frames,
+                log_x: false,
             },
         ),
         (
@@ -183,6 +357,8 @@ fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>>
                 y: "relMSE",
                 kind: Kind::Lines,
                 series: &relmse_lines,
+                guides: &g_relmse_frames,
+                log_x: false,
             },
         ),
         (
@@ -193,6 +369,8 @@ fn write_charts(plan: &Plan, results: &Results) -> Result<Vec<(String, String)>>
                 y: "fraction of slots",
                 kind: Kind::Lines,
                 series: &replaced_lines,
+                guides: &[],
+                log_x: false,
             },
         ),
     ];
@@ -222,63 +400,121 @@ fn rows(results: &Results) -> Vec<html::Row> {
             rel_mse: r.metrics.mean_rel_mse,
             flip: r.metrics.mean_flip,
             flicker: r.metrics.flicker_f1,
+            warped: r.warped.f1,
             replaced: r.mean_replaced,
             acceptance: r.mean_acceptance,
         })
         .collect()
 }
 
+/// The table's last row: the reference's noise floor.
+fn floor_row(floor: &Floor) -> html::FloorRow {
+    html::FloorRow {
+        label: format!(
+            "reference noise floor ({}+{} spp halves)",
+            floor.spp[0], floor.spp[1]
+        ),
+        rel_mse: floor.rel_mse,
+        flicker: floor.flicker_f1,
+        warped: floor.warped_f1,
+    }
+}
+
 /// Prints the setting and the summary table.
-fn print_table(plan: &Plan, notes: &[String], rows: &[html::Row]) {
+fn print_table(
+    plan: &Plan,
+    notes: &[String],
+    rows: &[html::Row],
+    floor: &html::FloorRow,
+) -> std::io::Result<()> {
     let cfg = &plan.cfg;
-    println!("{}", notes.join("\n"));
-    println!(
-        "{:14} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10}",
-        "run", "s/frame", "relMSE", "FLIP", "flicker", "replaced", "accept"
-    );
+    crate::outln!("{}", notes.join("\n"))?;
+    let width = rows
+        .iter()
+        .map(|r| r.label.len())
+        .chain([14, "reference floor".len()])
+        .max()
+        .unwrap_or(14);
+    crate::outln!(
+        "{:width$} {:>10} {:>10} {:>8} {:>10} {:>10} {:>10} {:>10}",
+        "run",
+        "s/frame",
+        "relMSE",
+        "FLIP",
+        "flicker",
+        "warped",
+        "replaced",
+        "accept"
+    )?;
     for r in rows {
-        println!(
-            "{:14} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.3} {:>10}",
+        crate::outln!(
+            "{:width$} {:>10.3} {:>10.5} {:>8.4} {:>10.5} {:>10.5} {:>10.3} {:>10}",
             r.label,
             r.seconds,
             r.rel_mse,
             r.flip,
             r.flicker,
+            r.warped,
             r.replaced,
             r.acceptance
                 .map(|a| format!("{a:.3}"))
                 .unwrap_or_else(|| "-".into())
-        );
+        )?;
     }
-    println!(
+    crate::outln!(
+        "{:width$} {:>10} {:>10.5} {:>8} {:>10.5} {:>10} {:>10} {:>10}",
+        "reference floor",
+        "-",
+        floor.rel_mse,
+        "-",
+        floor.flicker,
+        floor
+            .warped
+            .map(|w| format!("{w:.5}"))
+            .unwrap_or_else(|| "-".into()),
+        "-",
+        "-"
+    )?;
+    crate::outln!(
         "wrote {}/report.html, metrics.csv, metrics.json, charts/",
         cfg.out.display()
-    );
+    )
 }
 
 /// Writes every output of the comparison and prints its table.
-pub fn write(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<()> {
+pub fn write(plan: &Plan, reference: &[Hdr], floor: &Floor, results: &Results) -> Result<()> {
     let cfg = &plan.cfg;
     let spec = plan.spec.as_str();
     let clips = clips(plan, reference, results)?;
     write_csv(plan, results)?;
-    let notes = notes(plan, results);
+    let notes = notes(plan, floor, results);
     crate::report::write_json(
         &cfg.out.join("metrics.json"),
-        &serde_json::json!({ "scene": spec, "size": cfg.sequence.size.to_string(), "frames": plan.numbers, "spp": cfg.spp, "notes": notes, "runs": results.records }),
+        &serde_json::json!({
+            "scene": spec,
+            "size": cfg.sequence.size.to_string(),
+            "frames": plan.numbers,
+            "spp": cfg.spp,
+            "sweeps": cfg.sweep,
+            "notes": notes,
+            "floor": floor,
+            "runs": results.records,
+        }),
     )?;
 
-    let svgs = write_charts(plan, results)?;
+    let svgs = write_charts(plan, floor, results)?;
     let rows = rows(results);
+    let floor_row = floor_row(floor);
     let page = html::page(
         &format!("irad compare: {spec}"),
         &notes,
         &rows,
+        Some(&floor_row),
         &svgs,
         &clips,
     );
     write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
 
-    print_table(plan, &notes, &rows);
+    print_table(plan, &notes, &rows, &floor_row)?;
     Ok(())
 }

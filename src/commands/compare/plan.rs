@@ -1,7 +1,7 @@
 //! What a comparison will do, checked before anything renders: the scene, the frames, and
 //! every run's settings (against the adapter too), on the one device all runs share.
 
-use crate::config;
+use crate::config::{self, Knob};
 use crate::gpu::Gpu;
 use crate::radiosity::Method;
 use crate::scene::Scene;
@@ -22,16 +22,31 @@ pub struct Plan {
     pub cache: PathBuf,
 }
 
-/// A run's label: `mh 256`.
-pub fn label(s: SamplerKind, vpls: u32) -> String {
-    format!("{s} {vpls}")
+/// A run's label: `mh 256`, or `mh 256 mh-rate=0.1` for a run of a sweep.
+pub fn label(s: SamplerKind, vpls: u32, knob: Option<(Knob, f64)>) -> String {
+    match knob {
+        Some((k, v)) => format!("{s} {vpls} {k}={v}"),
+        None => format!("{s} {vpls}"),
+    }
+}
+
+/// One run of a comparison.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSpec {
+    pub method: Method,
+    pub sampler: SamplerKind,
+    pub vpls: u32,
+    /// The swept knob and its value (None: the shared settings).
+    pub knob: Option<(Knob, f64)>,
+    /// Whether the report shows this run's animation.
+    pub shown: bool,
 }
 
 impl Plan {
     pub fn new(cfg: &config::Compare) -> Result<Plan> {
         cfg.validate()?;
         let spec = cfg.scene_name().to_string();
-        let scene = super::super::load_scene(&spec)?;
+        let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
         let (frames, note) = cfg.sequence.frames_or_all(scene.duration());
         if let Some(note) = note {
             eprintln!("note: {note}");
@@ -40,6 +55,13 @@ impl Plan {
         for &v in &cfg.vpls {
             let r = cfg.run(cfg.samplers[0], v);
             crate::gpu::renderer::check_config(&r.renderer_config(), &gpu.limits)?;
+            for sw in &cfg.sweep {
+                for &x in &sw.values {
+                    let r = cfg.run_with(sw.sampler, v, Some((sw.knob, x)));
+                    crate::gpu::renderer::check_config(&r.renderer_config(), &gpu.limits)
+                        .map_err(|e| anyhow::anyhow!("--sweep {sw}: {e}"))?;
+                }
+            }
         }
         crate::report::prepare_out_dir(&cfg.out)?;
         let cache = super::reference_cache::dir(cfg, &spec);
@@ -55,18 +77,44 @@ impl Plan {
         })
     }
 
-    /// Every run, in order: (method, sampler, VPLs). Instant radiosity runs every sampler at
-    /// every VPL count; a classical method runs once (its sampler and VPL count unused).
-    pub fn runs(&self) -> Vec<(Method, SamplerKind, u32)> {
+    /// Every run, in order. Instant radiosity runs every sampler at every VPL count, a swept
+    /// sampler once per value of each of its sweeps and VPL count; a classical method runs
+    /// once (its sampler and VPL count unused). The report shows the runs at the shown VPL
+    /// count, of a swept sampler only its first sweep's first value.
+    pub fn runs(&self) -> Vec<RunSpec> {
         let c = &self.cfg;
+        let show = c.shown_vpls();
         let mut runs = Vec::new();
-        for &m in &c.methods {
-            if m == Method::Instant {
-                for &s in &c.samplers {
-                    runs.extend(c.vpls.iter().map(|&v| (m, s, v)));
+        for &method in &c.methods {
+            if method == Method::Instant {
+                for &sampler in &c.samplers {
+                    let mut knobs: Vec<Option<(Knob, f64)>> = c
+                        .sweep
+                        .iter()
+                        .filter(|sw| sw.sampler == sampler)
+                        .flat_map(|sw| sw.values.iter().map(|&x| Some((sw.knob, x))))
+                        .collect();
+                    if knobs.is_empty() {
+                        knobs.push(None);
+                    }
+                    for (i, &knob) in knobs.iter().enumerate() {
+                        runs.extend(c.vpls.iter().map(|&vpls| RunSpec {
+                            method,
+                            sampler,
+                            vpls,
+                            knob,
+                            shown: i == 0 && vpls == show,
+                        }));
+                    }
                 }
             } else {
-                runs.push((m, c.samplers[0], c.vpls[0]));
+                runs.push(RunSpec {
+                    method,
+                    sampler: c.samplers[0],
+                    vpls: c.vpls[0],
+                    knob: None,
+                    shown: true,
+                });
             }
         }
         runs
@@ -74,8 +122,21 @@ impl Plan {
 
     /// The progress bar's length: reference rows still to trace, plus every run's frames.
     pub fn work_units(&self) -> u64 {
+        // Each missing image of either half is traced row by row.
         let missing = super::reference_cache::missing(self) as u64;
         let runs = self.runs().len() as u64;
         missing * self.cfg.sequence.size.height as u64 + runs * self.numbers.len() as u64
+    }
+
+    /// Where each frame's pixels were in the frame before (for warped flicker), from the
+    /// scene's exact motion.
+    pub fn motion(&self) -> Vec<Vec<Option<glam::Vec2>>> {
+        let s = &self.cfg.sequence;
+        let frames: Vec<crate::scene::Frame> = self
+            .numbers
+            .iter()
+            .map(|&f| self.scene.at(s.time(f)))
+            .collect();
+        crate::metrics::warp::motion(&frames, s.size.width, s.size.height)
     }
 }

@@ -1,14 +1,38 @@
-//! The comparison's reference frames: path-traced once and kept in
-//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>/`, reused frame by frame
-//! whenever those settings match. The hash is of the scene's source (the file's bytes, or a
-//! built-in's generated glTF), so an edited file, or another file of the same name, gets a
-//! reference of its own.
+//! The comparison's reference frames, traced as two independent halves so that the reference
+//! can measure its own noise (the floor of every figure, see [`crate::metrics::floor`]). Half
+//! `a` has `ceil(spp / 2)` samples a pixel and half `b` `floor(spp / 2)`, each with its own seed
+//! derived from `--seed`; the reference is their spp-weighted mean, so it is a `spp`-sample
+//! estimate like any other. The halves are kept in
+//! `CACHE/reference/<scene>_<hash>_<WxH>_<spp>spp_<fps>fps_seed<S>_halves<A>+<B>[_camera<hash>]/{a,b}/`
+//! and reused frame by frame whenever those settings match. The hash is of the scene's
+//! source (the file's bytes, or a built-in's generated glTF), so an edited file, or another
+//! file of the same name, gets a reference of its own, and so does another `--camera`. Caches written before the halves (one
+//! image a frame, folder name without `_halves`) are never matched, so never misread.
 
 use super::plan::Plan;
 use crate::config;
 use crate::image::Hdr;
 use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
+
+/// The two halves' samples per pixel for a reference of `spp` (at least 2).
+pub fn halves(spp: u32) -> [u32; 2] {
+    [spp.div_ceil(2), spp / 2]
+}
+
+/// The seed of half `h` (0: a, 1: b) of a reference traced with `seed`: two independent
+/// streams, neither equal to `seed`'s own nor to another seed's halves.
+pub fn half_seed(seed: u64, h: usize) -> u64 {
+    crate::math::stream_seed(&[seed, 0x4a1f_0000 + h as u64])
+}
+
+/// The reference, its two halves and their samples per pixel.
+pub struct Reference {
+    /// The spp-weighted mean of the halves, frame by frame.
+    pub frames: Vec<Hdr>,
+    pub halves: [Vec<Hdr>; 2],
+    pub spp: [u32; 2],
+}
 
 /// The cache folder of a reference.
 pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
@@ -26,8 +50,14 @@ pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
         })
         .collect();
     let s = &cfg.sequence;
+    // A --camera of its own: the same scene seen from elsewhere.
+    let camera = s
+        .camera
+        .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
+        .unwrap_or_default();
+    let [a, b] = halves(cfg.spp);
     cfg.cache.join("reference").join(format!(
-        "{name}_{:016x}_{}_{}spp_{}fps_seed{}",
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}",
         source_hash(spec),
         s.size,
         cfg.spp,
@@ -43,31 +73,44 @@ fn source_hash(spec: &str) -> u64 {
         .map(String::into_bytes)
         .or_else(|| std::fs::read(spec).ok())
         .unwrap_or_default();
+    fnv(&bytes)
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
         (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
     })
 }
 
-fn cached(plan: &Plan, f: u32) -> PathBuf {
+const HALF: [&str; 2] = ["a", "b"];
+
+fn cached(plan: &Plan, h: usize, f: u32) -> PathBuf {
     plan.cache
+        .join(HALF[h])
         .join(format!("{}.exr", crate::report::frame_stem(f)))
 }
 
-/// How many of the plan's frames are not cached yet.
+/// How many (half, frame) images of the plan are not cached yet.
 pub fn missing(plan: &Plan) -> usize {
-    plan.numbers
-        .iter()
-        .filter(|&&f| !cached(plan, f).exists())
-        .count()
+    (0..2)
+        .map(|h| {
+            plan.numbers
+                .iter()
+                .filter(|&&f| !cached(plan, h, f).exists())
+                .count()
+        })
+        .sum()
 }
 
-/// The reference frames of the plan, from the cache where present, else traced and cached.
-pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>> {
+/// One half's frames, from the cache where present, else traced and cached.
+fn half(plan: &Plan, h: usize, spp: u32, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>> {
     let cfg = &plan.cfg;
     let size = cfg.sequence.size;
+    let folder = plan.cache.join(HALF[h]);
+    crate::report::prepare_out_dir(&folder)?;
     let mut images: Vec<Option<Hdr>> = Vec::with_capacity(plan.numbers.len());
     for &f in &plan.numbers {
-        let path = cached(plan, f);
+        let path = cached(plan, h, f);
         if !path.exists() {
             images.push(None);
             continue;
@@ -90,15 +133,19 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>>
         .filter(|(_, i)| i.is_none())
         .map(|(&f, _)| f)
         .collect();
+    let seq = config::Sequence {
+        seed: half_seed(cfg.sequence.seed, h),
+        ..cfg.sequence.clone()
+    };
     let mut traced = Vec::new();
     crate::commands::reference::trace_frames(
         &plan.scene,
-        &cfg.sequence,
-        cfg.spp,
+        &seq,
+        spp,
         todo,
         tick,
         &mut |f, _, img| {
-            crate::report::write_frame(&plan.cache, f, &img, cfg.render.exposure)?;
+            crate::report::write_frame(&folder, f, &img, cfg.render.exposure)?;
             traced.push(img);
             Ok(())
         },
@@ -108,6 +155,39 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Vec<Hdr>>
         .into_iter()
         .map(|i| i.unwrap_or_else(|| traced.next().expect("one traced per missing")))
         .collect())
+}
+
+/// The spp-weighted mean of two halves.
+pub fn mean_of_halves(a: &Hdr, b: &Hdr, spp: [u32; 2]) -> Hdr {
+    let (wa, wb) = (spp[0] as f32, spp[1] as f32);
+    Hdr {
+        width: a.width,
+        height: a.height,
+        data: a
+            .data
+            .iter()
+            .zip(&b.data)
+            .map(|(x, y)| (*x * wa + *y * wb) / (wa + wb))
+            .collect(),
+    }
+}
+
+/// The reference frames of the plan and their halves, from the cache where present, else
+/// traced and cached.
+pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Reference> {
+    let spp = halves(plan.cfg.spp);
+    let a = half(plan, 0, spp[0], tick)?;
+    let b = half(plan, 1, spp[1], tick)?;
+    let frames = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| mean_of_halves(x, y, spp))
+        .collect();
+    Ok(Reference {
+        frames,
+        halves: [a, b],
+        spp,
+    })
 }
 
 #[cfg(test)]
@@ -138,6 +218,52 @@ mod tests {
         assert_ne!(dir_of("cornell", 256), dir_of("cornell", 512));
         assert_eq!(dir_of("cornell", 256), dir_of("cornell", 256));
         assert_ne!(dir_of("cornell", 256), dir_of("cornell-orbit", 256));
+        // Another --camera, another reference; the same one, the same folder.
+        let with_camera = |spec: &str| {
+            let mut c = config::Compare::default();
+            c.sequence.camera = Some(spec.parse().unwrap());
+            dir(&c, "cornell")
+        };
+        let (c1, c2) = ("0,0,3.9:0,0,0:40", "0,0,3.9:0,0,0:41");
+        assert_ne!(with_camera(c1), dir_of("cornell", 256));
+        assert_ne!(with_camera(c1), with_camera(c2));
+        assert_eq!(with_camera(c1), with_camera(c1));
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// A cache written before the halves (one image a frame, in a folder named
+    /// `..._seed<S>`) is never taken for the halves: the folder's name says how the spp were
+    /// split, and an odd spp splits A = B + 1.
+    #[test]
+    fn the_cache_folder_names_the_halves() {
+        let c = config::Compare {
+            spp: 256,
+            ..Default::default()
+        };
+        let d = dir(&c, "cornell");
+        let name = d.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            name.ends_with("_256spp_24fps_seed1_halves128+128"),
+            "{name}"
+        );
+        let old = name.trim_end_matches("_halves128+128");
+        assert_ne!(name, old);
+        assert_eq!(halves(5), [3, 2]);
+        assert_eq!(halves(2), [1, 1]);
+        // The halves' seeds differ from each other, from the seed, and from a neighbouring
+        // seed's halves.
+        let s = [
+            half_seed(7, 0),
+            half_seed(7, 1),
+            half_seed(8, 0),
+            half_seed(8, 1),
+        ];
+        for i in 0..4 {
+            assert_ne!(s[i], 7);
+            assert_ne!(s[i], 8);
+            for j in 0..i {
+                assert_ne!(s[i], s[j]);
+            }
+        }
     }
 }

@@ -1,10 +1,11 @@
 //! Every sampler x VPL count of a comparison, rendered on the plan's device and measured
 //! against the reference.
 
-use super::plan::{label, Plan};
-use crate::config;
+use super::plan::{label, Plan, RunSpec};
+use crate::config::{self, Knob};
 use crate::frame::Pipeline;
 use crate::image::Hdr;
+use crate::metrics::warp::{warped_f1, WarpedFlicker};
 use crate::metrics::{self, SequenceMetrics};
 use crate::radiosity::Method;
 use crate::vpl::sampler::SamplerKind;
@@ -17,21 +18,28 @@ pub struct RunRecord {
     pub method: Method,
     pub sampler: SamplerKind,
     pub vpls: u32,
+    /// The swept knob of this run (None: the shared settings).
+    pub knob: Option<Knob>,
+    pub knob_value: Option<f64>,
     pub mean_seconds: f64,
     /// Mean fraction of slots replaced, from the second frame on (the first fills them all).
     pub mean_replaced: f64,
     pub mean_acceptance: Option<f64>,
     pub metrics: SequenceMetrics,
+    /// Motion-compensated flicker (the previous frame's error warped along the scene's
+    /// motion).
+    pub warped: WarpedFlicker,
     pub seconds: Vec<f64>,
     pub replaced: Vec<f32>,
     pub acceptance: Vec<Option<f32>>,
 }
 
 impl RunRecord {
-    /// `mh 256` for instant radiosity, the method's name for a classical one.
+    /// `mh 256` (`mh 256 mh-rate=0.1` in a sweep) for instant radiosity, the method's name
+    /// for a classical one.
     pub fn label(&self) -> String {
         match self.method {
-            Method::Instant => label(self.sampler, self.vpls),
+            Method::Instant => label(self.sampler, self.vpls, self.knob.zip(self.knob_value)),
             m => m.name().to_string(),
         }
     }
@@ -54,14 +62,13 @@ fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
 fn run(
     plan: &Plan,
     reference: &[Hdr],
-    method: Method,
-    sampler: SamplerKind,
-    vpls: u32,
+    motion: &[Vec<Option<glam::Vec2>>],
+    spec: RunSpec,
     tick: &dyn Fn(),
 ) -> Result<(RunRecord, Vec<Hdr>)> {
     let cfg = config::Render {
-        method,
-        ..plan.cfg.run(sampler, vpls)
+        method: spec.method,
+        ..plan.cfg.run_with(spec.sampler, spec.vpls, spec.knob)
     };
     let mut p = Pipeline::new(plan.gpu.clone(), plan.scene.clone(), &cfg)?;
     let (mut imgs, mut seconds, mut replaced, mut acceptance) =
@@ -75,10 +82,13 @@ fn run(
         tick();
     }
     let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
+    let warped = warped_f1(&imgs, reference, motion)?;
     let record = RunRecord {
-        method,
-        sampler,
-        vpls,
+        method: spec.method,
+        sampler: spec.sampler,
+        vpls: spec.vpls,
+        knob: spec.knob.map(|k| k.0),
+        knob_value: spec.knob.map(|k| k.1),
         mean_seconds: mean(seconds.iter().copied()).unwrap_or(0.0),
         mean_replaced: mean(replaced.iter().skip(1).map(|&x| x as f64)).unwrap_or(1.0),
         mean_acceptance: mean(
@@ -88,6 +98,7 @@ fn run(
                 .filter_map(|a| a.map(|x| x as f64)),
         ),
         metrics,
+        warped,
         seconds,
         replaced,
         acceptance,
@@ -95,17 +106,21 @@ fn run(
     Ok((record, imgs))
 }
 
-/// Every sampler x VPL count, in order.
-pub fn run_all(plan: &Plan, reference: &[Hdr], tick: &dyn Fn()) -> Result<Results> {
-    let show = plan.cfg.shown_vpls();
+/// Every run of the plan, in order.
+pub fn run_all(
+    plan: &Plan,
+    reference: &[Hdr],
+    motion: &[Vec<Option<glam::Vec2>>],
+    tick: &dyn Fn(),
+) -> Result<Results> {
     let mut results = Results {
         records: Vec::new(),
         shown: Vec::new(),
         adapter: plan.gpu.adapter.to_string(),
     };
-    for (m, s, v) in plan.runs() {
-        let (record, imgs) = run(plan, reference, m, s, v, tick)?;
-        if v == show || m != Method::Instant {
+    for spec in plan.runs() {
+        let (record, imgs) = run(plan, reference, motion, spec, tick)?;
+        if spec.shown {
             results.shown.push((record.label(), imgs));
         }
         results.records.push(record);
