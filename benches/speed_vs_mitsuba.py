@@ -115,8 +115,12 @@ def reference(irad, out, size, frames, spp, given=None):
     rj = os.path.join(ref, "run.json")
     if os.path.exists(rj):
         r = read_json(rj)
-        have = {"scene": r.get("scene"), "width": r.get("width"), "height": r.get("height"),
-                "spp": r.get("spp"), "frames": [f["frame"] for f in r.get("frames", [])]}
+        # run.json keeps the command's settings: size "WxH" under settings.sequence.
+        st = r.get("settings", {})
+        w, _, h = st.get("sequence", {}).get("size", "").partition("x")
+        have = {"scene": r.get("scene"), "width": int(w) if w.isdigit() else None,
+                "height": int(h) if h.isdigit() else None, "spp": st.get("spp"),
+                "frames": [f["frame"] for f in r.get("frames", [])]}
         if have == want:
             print(f"reference: cached {ref} ({spp} spp, frames {a}..{b})")
             return ref
