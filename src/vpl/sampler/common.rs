@@ -45,6 +45,12 @@ pub fn fresh_paths(
                 .collect()
         };
         for p in traced {
+            if whole && vpls.is_empty() && p.len() > target {
+                // One path longer than every slot (an albedo-1 room can bounce for hundreds
+                // of vertices): its first `target` VPLs, rather than no light at all.
+                vpls.extend(p.into_iter().take(target));
+                return (vpls, 1);
+            }
             if vpls.len() >= target || (whole && vpls.len() + p.len() > target) {
                 return (vpls, paths);
             }
@@ -157,4 +163,29 @@ pub fn replaced(before: &[Key], after: &[Key]) -> f32 {
         return 1.0;
     }
     before.iter().zip(after).filter(|(a, b)| a != b).count() as f32 / after.len() as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// Whole paths only: a first path longer than the slots is cut to them instead of
+    /// leaving no VPL at all (with one slot, every path of two or more bounces used to give
+    /// an empty set, so the frame had no indirect light).
+    #[test]
+    fn a_path_longer_than_the_slots_still_fills_them() {
+        let scene = builtin::load_any("cornell").unwrap();
+        let f = scene.at(0.0);
+        let tr = Tracer::new(&f);
+        let mut long = 0;
+        for stream in 0..20 {
+            let (all, _) = fresh_paths(&f, &tr, 1, stream, 1000, true);
+            let (one, _) = fresh_paths(&f, &tr, 1, stream, 1, true);
+            assert_eq!(one.len(), 1, "stream {stream}");
+            long += (all.iter().take_while(|v| v.path == all[0].path).count() > 1) as usize;
+        }
+        // The case the fix is for happened: some first paths had several VPLs.
+        assert!(long > 0);
+    }
 }
