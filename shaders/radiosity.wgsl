@@ -1,7 +1,7 @@
 // Radiosity display: the element mesh rasterized with its Gouraud colours (radiance at the
 // vertices, emission included, interpolated across each element) as float bits in an
 // integer target (renderable everywhere, GL included); back faces are black (elements are
-// one-sided). `resolve` box-filters each pixel's S x S sub-samples (rad_size.z = S, 1
+// one-sided). `resolve` box-filters each pixel's S x S sub-samples (S = rad_size[2], 1
 // without supersampling; the target holds S x S tiles of the image, tile (i, j) sampling
 // every pixel at sub-sample (i, j)) into the per-pixel buffer the other passes use.
 
@@ -37,23 +37,26 @@ fn fs(i: RadOut) -> @location(0) vec4u {
     return vec4u(bitcast<vec3u>(i.color), 1u);
 }
 
-@group(0) @binding(1) var<uniform> rad_size: vec4u;
+// (width, height, S): read from storage, as every compute pass's parameters (see
+// `Kind::Params` in src/gpu/bindings.rs: lavapipe recompiles a loop over uniform values).
+@group(0) @binding(1) var<storage, read> rad_size: array<u32>;
 @group(0) @binding(2) var rad_image: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read_write> rad_out: array<vec4f>;
 
 @compute @workgroup_size(8, 8)
 fn resolve(@builtin(global_invocation_id) gid: vec3u) {
-    if gid.x >= rad_size.x || gid.y >= rad_size.y {
+    let sz = vec3u(rad_size[0], rad_size[1], rad_size[2]);
+    if gid.x >= sz.x || gid.y >= sz.y {
         return;
     }
     // Tile (i, j) of the target holds every pixel's sub-sample (i, j).
-    let s = max(rad_size.z, 1u);
+    let s = max(sz.z, 1u);
     var sum = vec4f(0.0);
     for (var ty = 0u; ty < s; ty++) {
         for (var tx = 0u; tx < s; tx++) {
-            let t = textureLoad(rad_image, vec2i(gid.xy + vec2u(tx, ty) * rad_size.xy), 0);
+            let t = textureLoad(rad_image, vec2i(gid.xy + vec2u(tx, ty) * sz.xy), 0);
             sum += vec4f(bitcast<vec3f>(t.xyz), f32(t.w));
         }
     }
-    rad_out[gid.y * rad_size.x + gid.x] = sum / f32(s * s);
+    rad_out[gid.y * sz.x + gid.x] = sum / f32(s * s);
 }

@@ -167,7 +167,7 @@ pub(crate) const fn texture(name: &'static str, dim: wgpu::TextureViewDimension)
 }
 
 impl Binding {
-    fn layout_entry(
+    pub(crate) fn layout_entry(
         &self,
         binding: u32,
         visibility: wgpu::ShaderStages,
@@ -295,6 +295,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::compose::PASS,
         &super::resolve::PASS,
         &crate::radiosity::hemicube::PASS,
+        &super::radiosity::PASS,
     ]
 }
 
@@ -472,7 +473,9 @@ mod tests {
         let uniforms: Vec<String> = all_passes()
             .into_iter()
             .flat_map(|p| p.groups.iter().map(move |g| (p.name, g)))
-            .filter(|(_, g)| g.stages.contains(wgpu::ShaderStages::COMPUTE))
+            // Compute-only groups (the radiosity pass's one group also holds its raster's
+            // camera, which only the vertex and fragment stages bind).
+            .filter(|(_, g)| g.stages == wgpu::ShaderStages::COMPUTE)
             .flat_map(|(name, g)| {
                 g.bindings
                     .iter()

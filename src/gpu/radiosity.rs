@@ -5,28 +5,8 @@
 //! rasterized at S x S sub-samples per pixel and the resolve box-filters them, as the
 //! instant-radiosity frame's `resolve` pass does.
 
+use super::bindings::{dynamic_uniform, gpu_struct, read, read_write, texture, Elem, Group, Pass};
 use super::{gbuffer::target, Gpu};
-
-fn entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
-fn buffer_ty(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
 
 fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
     gpu.device
@@ -52,11 +32,42 @@ struct Vertex {
     normal: [f32; 3],
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct CameraUniform {
-    view_proj: Mat4,
-    position: [f32; 4],
+gpu_struct! {
+    /// The camera of one sub-sample tile (at a dynamic offset per tile).
+    struct RadCamera {
+        view_proj: Mat4,
+        position: [f32; 4],
+    }
+}
+
+/// The pass's bindings, all in group 0: the raster's camera (binding 0, vertex and
+/// fragment), then the resolve's size, image and output (1 to 3, compute). The layouts
+/// below are built from these entries, and the naga test checks them against the shader.
+pub(crate) const PASS: Pass = Pass {
+    name: "radiosity",
+    wgsl: include_str!("../../shaders/radiosity.wgsl"),
+    groups: &[Group {
+        stages: wgpu::ShaderStages::VERTEX_FRAGMENT.union(wgpu::ShaderStages::COMPUTE),
+        bindings: &[
+            dynamic_uniform("rad_cam", &RadCamera::LAYOUT),
+            read("rad_size", Elem::Plain(4)),
+            texture("rad_image", wgpu::TextureViewDimension::D2),
+            read_write("rad_out", Elem::Plain(16)),
+        ],
+    }],
+};
+
+/// Layout of bindings `range` of [`PASS`] for `stages`.
+fn layout_of(
+    gpu: &Gpu,
+    label: &str,
+    range: std::ops::Range<usize>,
+    stages: wgpu::ShaderStages,
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<_> = range
+        .map(|i| PASS.groups[0].bindings[i].layout_entry(i as u32, stages))
+        .collect();
+    layout(gpu, label, &entries)
 }
 
 pub struct RadiosityPass {
@@ -90,18 +101,11 @@ impl RadiosityPass {
     pub fn with_aa(gpu: &Gpu, width: u32, height: u32, aa: u32) -> Self {
         let aa = aa.max(1);
         let module = gpu.shader("radiosity", include_str!("../../shaders/radiosity.wgsl"));
-        let raster_layout = layout(
+        let raster_layout = layout_of(
             gpu,
             "radiosity raster",
-            &[entry(
-                0,
-                wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: None,
-                },
-            )],
+            0..1,
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
         );
         let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
         let raster = gpu.raster_pipeline_over(
@@ -115,7 +119,7 @@ impl RadiosityPass {
                 attributes: &attributes,
             },
         );
-        let stride = super::gbuffer::uniform_stride::<CameraUniform>(gpu);
+        let stride = super::gbuffer::uniform_stride::<RadCamera>(gpu);
         let camera = gpu.buffer(
             "radiosity cameras",
             stride * (aa * aa) as u64,
@@ -129,7 +133,7 @@ impl RadiosityPass {
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &camera,
                     offset: 0,
-                    size: wgpu::BufferSize::new(std::mem::size_of::<CameraUniform>() as u64),
+                    size: wgpu::BufferSize::new(std::mem::size_of::<RadCamera>() as u64),
                 }),
             }],
         });
@@ -153,33 +157,12 @@ impl RadiosityPass {
         let size = gpu.buffer(
             "radiosity size",
             16,
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         gpu.queue
             .write_buffer(&size, 0, bytemuck::cast_slice(&[width, height, aa, 0u32]));
         // The resolve binds 1..3 (binding 0 is the raster's camera).
-        let cs = wgpu::ShaderStages::COMPUTE;
-        let resolve_layout = layout(
-            gpu,
-            "radiosity resolve",
-            &[
-                entry(1, cs, buffer_ty(wgpu::BufferBindingType::Uniform)),
-                entry(
-                    2,
-                    cs,
-                    wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                ),
-                entry(
-                    3,
-                    cs,
-                    buffer_ty(wgpu::BufferBindingType::Storage { read_only: false }),
-                ),
-            ],
-        );
+        let resolve_layout = layout_of(gpu, "radiosity resolve", 1..4, wgpu::ShaderStages::COMPUTE);
         let resolve =
             gpu.compute_pipeline("radiosity resolve", &module, "resolve", &[&resolve_layout]);
         let resolve_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -282,7 +265,7 @@ impl RadiosityPass {
         for j in 0..s {
             for i in 0..s {
                 let k = (j * s + i) as usize;
-                let u = CameraUniform {
+                let u = RadCamera {
                     view_proj: super::gbuffer::jittered(
                         view_proj,
                         super::gbuffer::subsample(i, j, s),
@@ -292,7 +275,7 @@ impl RadiosityPass {
                     position: cam.position.extend(1.0).to_array(),
                 };
                 let o = k * self.stride as usize;
-                bytes[o..o + std::mem::size_of::<CameraUniform>()]
+                bytes[o..o + std::mem::size_of::<RadCamera>()]
                     .copy_from_slice(bytemuck::bytes_of(&u));
                 tiles.push(((k as u64 * self.stride) as u32, [i * w, j * h, w, h]));
             }
