@@ -571,19 +571,7 @@ mod tests {
                 .collect();
             dark.materials = std::sync::Arc::new(mats);
             let sol = solve(&dark, &tr, &s);
-            let lit = sol.radiance.iter().filter(|l| **l != Vec3::ZERO).count();
-            let p = sol.power(&sol.radiance).x;
-            println!(
-                "{method:?}: {lit} of {} elements lit, power {p}",
-                sol.mesh.len()
-            );
-            // Measured: power 9.3e-4 (progressive, stochastic: a few shadow rays slip through
-            // the box's edges), 0 (hierarchical: its top-level nodes see no light, so it does
-            // not solve); unshadowed, the light would give about 1.8.
-            assert!(
-                sol.radiance.iter().all(|l| l.is_finite()) && p < 1.4e-3,
-                "{method:?}: power {p}"
-            );
+            assert!(sol.radiance.iter().all(|l| *l == Vec3::ZERO), "{method:?}");
             // Empty scene.
             f.tris.clear();
             f.normals.clear();
