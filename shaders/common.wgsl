@@ -12,6 +12,13 @@ struct Tri {
     emission: vec4f,
 }
 
+// A sample's albedo (alpha in w) and emitted radiance, from the `surface` pass (textured
+// scenes; otherwise the triangle's are used).
+struct Surface {
+    albedo: vec4f,
+    emission: vec4f,
+}
+
 // A VPL: position, unit normal (facing where its light arrived from), and its weighted flux
 // `power * albedo_y * weight` (RGB).
 struct Vpl {
@@ -51,7 +58,7 @@ struct Params {
     shift_y: u32,
     aa: u32, // sub-samples per pixel side (width, height: the sub-sample grid's)
     near_points: u32,
-    _pad0: u32,
+    textured: u32, // 1: `surface` holds each sample's albedo and emission
     _pad1: u32,
     _pad2: u32,
 }

@@ -16,6 +16,7 @@
 @group(0) @binding(5) var<storage, read_write> hdr: array<vec4f>;
 @group(0) @binding(6) var<storage, read_write> ldr: array<u32>;
 @group(0) @binding(7) var<storage, read_write> indirect_ss: array<vec4f>;
+@group(0) @binding(8) var<storage, read> surface: array<Surface>;
 
 // The interleave filter's surface test (see interleave.wgsl).
 const NORMAL_COS: f32 = 0.9;
@@ -61,12 +62,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     if g.w != 0u {
         let tri = tris[g.w - 1u];
         if dot(tri.n.xyz, P.cam_pos.xyz - gbuffer_x(g)) > 0.0 {
-            c = tri.emission.xyz;
+            c = select(tri.emission.xyz, surface[pix].emission.xyz, P.textured != 0u);
         }
         if P.aa > 1u {
             let x = gbuffer_x(g);
             let e = indirect_of(gid.xy, x, facing(tri.n.xyz, x, P.cam_pos.xyz));
-            let ind = e * tri.albedo.xyz;
+            let ind = e * select(tri.albedo.xyz, surface[pix].albedo.xyz, P.textured != 0u);
             indirect_ss[pix] = vec4f(ind, 1.0);
             c += direct[pix].xyz + ind;
         } else {

@@ -16,6 +16,7 @@
 @group(0) @binding(3) var shadows: texture_2d_array<u32>;
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> direct: array<vec4f>;
+@group(0) @binding(6) var<storage, read> surface: array<Surface>;
 
 // Face index (0: +n, 1: +t, 2: -t, 3: +b, 4: -b) and its (right, up, fwd) local coordinates
 // of a direction with local coordinates l = (t, b, n) components.
@@ -112,5 +113,5 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
         sum += ls.radiance.xyz * (f * cos_x / d2);
     }
-    direct[pix] = vec4f(sum * f32(share) * tri.albedo.xyz / PI, 1.0);
+    direct[pix] = vec4f(sum * f32(share) * select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u) / PI, 1.0);
 }

@@ -14,6 +14,7 @@
 @group(0) @binding(3) var<storage, read> ism: array<f32>;
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> indirect: array<vec4f>;
+@group(0) @binding(6) var<storage, read> surface: array<Surface>;
 
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
@@ -63,7 +64,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         indirect[pix] = vec4f(sum * f32(step), 1.0);
     } else {
         // Supersampled, compose applies each sub-sample's own albedo.
-        let albedo = select(tri.albedo.xyz, vec3f(1.0), p.aa > 1u);
+        let albedo = select(select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u), vec3f(1.0), p.aa > 1u);
         indirect[pix] = vec4f(sum * albedo, 1.0);
     }
 }

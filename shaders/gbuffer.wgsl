@@ -5,6 +5,12 @@ struct Camera {
     view_proj: mat4x4f,
 }
 @group(0) @binding(0) var<uniform> cam: Camera;
+@group(0) @binding(1) var<storage, read> cut: Cutouts;
+@group(0) @binding(2) var<storage, read> tris: array<Tri>;
+@group(0) @binding(3) var<storage, read> attrs: array<TriAttr>;
+@group(0) @binding(4) var<storage, read> materials: array<SurfaceMaterial>;
+@group(0) @binding(5) var<storage, read> textures: array<TexInfo>;
+@group(0) @binding(6) var<storage, read> texels: array<u32>;
 
 struct VsOut {
     @builtin(position) clip: vec4f,
@@ -24,5 +30,8 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
 // Integer target (renderable everywhere, GL included): position bits and triangle + 1.
 @fragment
 fn fs(i: VsOut) -> @location(0) vec4u {
+    if cut.on != 0u && cut_away(i.tri, i.world) {
+        discard;
+    }
     return vec4u(bitcast<vec3u>(i.world), i.tri + 1u);
 }

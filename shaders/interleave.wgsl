@@ -15,6 +15,7 @@
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> subsets: array<vec4f>;
 @group(0) @binding(4) var<storage, read_write> indirect: array<vec4f>;
+@group(0) @binding(5) var<storage, read> surface: array<Surface>;
 
 // Smallest cosine between the normals of pixels filtered together.
 const NORMAL_COS: f32 = 0.9;
@@ -72,6 +73,6 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     // The pixel itself always passes (weight 1): count >= 1.
     // Supersampled, compose applies each sub-sample's own albedo.
-    let albedo = select(tri.albedo.xyz, vec3f(1.0), p.aa > 1u);
+    let albedo = select(select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u), vec3f(1.0), p.aa > 1u);
     indirect[pix] = vec4f(sum / count * albedo, 1.0);
 }

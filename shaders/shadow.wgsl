@@ -14,10 +14,17 @@ struct Face {
     pad1: f32,
 }
 @group(0) @binding(0) var<uniform> F: Face;
+@group(0) @binding(1) var<storage, read> cut: Cutouts;
+@group(0) @binding(2) var<storage, read> tris: array<Tri>;
+@group(0) @binding(3) var<storage, read> attrs: array<TriAttr>;
+@group(0) @binding(4) var<storage, read> materials: array<SurfaceMaterial>;
+@group(0) @binding(5) var<storage, read> textures: array<TexInfo>;
+@group(0) @binding(6) var<storage, read> texels: array<u32>;
 
 struct VsOut {
     @builtin(position) clip: vec4f,
     @location(0) q: vec3f,
+    @location(1) @interpolate(flat) tri: u32,
 }
 
 @vertex
@@ -33,12 +40,16 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
         o.clip = vec4f(vx, vy, F.far * (vz - F.near) / (F.far - F.near), vz);
     }
     o.q = q;
+    o.tri = tri;
     return o;
 }
 
 // Integer target (renderable everywhere): the distance's bits; 0 means nothing there.
 @fragment
 fn fs(i: VsOut) -> @location(0) vec4u {
+    if cut.on != 0u && cut_away(i.tri, i.q + F.pos.xyz) {
+        discard;
+    }
     let d = select(length(i.q), dot(i.q, F.fwd.xyz), F.ortho > 0.0);
     return vec4u(bitcast<u32>(d), 0u, 0u, 0u);
 }

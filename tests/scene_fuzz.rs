@@ -182,6 +182,23 @@ fn spec_features() -> Value {
     v["meshes"][2]["primitives"][0]["mode"] = json!(5);
     v["meshes"][3]["primitives"][0]["mode"] = json!(6);
     v["materials"][3]["doubleSided"] = json!(true);
+    // A 2 x 2 PNG in a data: URI, as base colour (with KHR_texture_transform), emissive
+    // texture and alpha MASK, so that mutations reach the texture readers.
+    let img = image::RgbaImage::from_raw(2, 2, [255u8, 0, 0, 255, 0, 255, 0, 0].repeat(2)).unwrap();
+    let mut png = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut png, image::ImageFormat::Png).unwrap();
+    let data = base64::engine::general_purpose::STANDARD.encode(png.into_inner());
+    v["images"] = json!([{ "uri": format!("data:image/png;base64,{data}") }]);
+    v["samplers"] = json!([{ "magFilter": 9728, "wrapS": 33648, "wrapT": 33071 }]);
+    v["textures"] = json!([{ "source": 0, "sampler": 0 }]);
+    v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({
+        "index": 0, "extensions": { "KHR_texture_transform": { "offset": [0.5, 0.0], "rotation": 1.0, "scale": [2.0, 3.0] } }
+    });
+    v["materials"][0]["alphaMode"] = json!("MASK");
+    v["materials"][3]["emissiveTexture"] = json!({ "index": 0 });
+    let mut used = v["extensionsUsed"].as_array().cloned().unwrap_or_default();
+    used.push(json!("KHR_texture_transform"));
+    v["extensionsUsed"] = json!(used);
     v
 }
 

@@ -286,6 +286,7 @@ pub(crate) fn bytes<T>(n: u64) -> u64 {
 pub(crate) fn all_passes() -> Vec<&'static Pass> {
     vec![
         &super::gbuffer::PASS,
+        &super::surface::PASS,
         &super::shadow::PASS,
         &super::direct::PASS,
         &super::ism::SPLAT,

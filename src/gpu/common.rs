@@ -34,7 +34,9 @@ gpu_struct! {
         /// Ray-cast near-field points each redrawn ISM slot splats besides its subset of the
         /// point set (stored after the point set, `near_points` per slot; see `ism`).
         pub near_points: u32,
-        pub _pad0: u32,
+        /// 1: the `surface` pass wrote each sample's albedo and emission (textures, vertex
+        /// colours); 0: they are the triangle's.
+        pub textured: u32,
         pub _pad1: u32,
         pub _pad2: u32,
     }
@@ -47,6 +49,14 @@ gpu_struct! {
         pub v1: [f32; 4],
         pub v2: [f32; 4],
         pub n: [f32; 4],
+        pub albedo: [f32; 4],
+        pub emission: [f32; 4],
+    }
+}
+
+gpu_struct! {
+    /// A sample's albedo (alpha in w) and emitted radiance, as the `surface` pass finds them.
+    pub(crate) struct Surface {
         pub albedo: [f32; 4],
         pub emission: [f32; 4],
     }

@@ -2,7 +2,7 @@
 //! then exposure and sRGB into the 8-bit preview.
 
 use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Tri};
+use super::common::{Params, Surface, Tri};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -19,6 +19,7 @@ pub(crate) const PASS: Pass = Pass {
             read_write("hdr", Elem::Plain(16)),
             read_write("ldr", Elem::Plain(4)),
             read_write("indirect_ss", Elem::Plain(16)),
+            read("surface", Elem::Struct(&Surface::LAYOUT)),
         ],
     }],
 };
@@ -39,7 +40,7 @@ impl Compose {
         gpu: &Gpu,
         params: &wgpu::Buffer,
         tris: &wgpu::Buffer,
-        gbuf: &wgpu::TextureView,
+        (gbuf, surface): (&wgpu::TextureView, &wgpu::Buffer),
         (direct, indirect): (&wgpu::Buffer, &wgpu::Buffer),
         pixels: u64,
         supersampled: bool,
@@ -56,6 +57,7 @@ impl Compose {
                 ("P", params.as_entire_binding()),
                 ("tris", tris.as_entire_binding()),
                 ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("surface", surface.as_entire_binding()),
                 ("direct", direct.as_entire_binding()),
                 ("indirect", indirect.as_entire_binding()),
                 ("hdr", hdr.as_entire_binding()),

@@ -4,7 +4,7 @@
 //! `reference::twin::direct`.
 
 use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{LightSample, Params, Tri};
+use super::common::{LightSample, Params, Surface, Tri};
 use super::{Gpu, PixelPass};
 use crate::scene::{EmitterSample, SampleKind};
 
@@ -50,6 +50,7 @@ pub(crate) const PASS: Pass = Pass {
             texture("shadows", wgpu::TextureViewDimension::D2Array),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read_write("direct", Elem::Plain(16)),
+            read("surface", Elem::Struct(&Surface::LAYOUT)),
         ],
     }],
 };
@@ -66,7 +67,7 @@ impl Direct {
         tris: &wgpu::Buffer,
         lights: &wgpu::Buffer,
         shadows: &wgpu::TextureView,
-        gbuf: &wgpu::TextureView,
+        (gbuf, surface): (&wgpu::TextureView, &wgpu::Buffer),
         pixels: u64,
     ) -> Self {
         let output = gpu.buffer(
@@ -83,6 +84,7 @@ impl Direct {
                 ("lights", lights.as_entire_binding()),
                 ("shadows", wgpu::BindingResource::TextureView(shadows)),
                 ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("surface", surface.as_entire_binding()),
                 ("direct", output.as_entire_binding()),
             ],
         );

@@ -2,7 +2,7 @@
 //! visibility. Its CPU twin, with ray-traced visibility, is `reference::twin::gather`.
 
 use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Tri, Vpl};
+use super::common::{Params, Surface, Tri, Vpl};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -17,6 +17,7 @@ pub(crate) const PASS: Pass = Pass {
             read("ism", Elem::Plain(4)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read_write("indirect", Elem::Plain(16)),
+            read("surface", Elem::Struct(&Surface::LAYOUT)),
         ],
     }],
 };
@@ -33,7 +34,7 @@ impl Gather {
         tris: &wgpu::Buffer,
         vpls: &wgpu::Buffer,
         ism: &wgpu::Buffer,
-        gbuf: &wgpu::TextureView,
+        (gbuf, surface): (&wgpu::TextureView, &wgpu::Buffer),
         pixels: u64,
     ) -> Self {
         let output = gpu.buffer(
@@ -50,6 +51,7 @@ impl Gather {
                 ("vpls", vpls.as_entire_binding()),
                 ("ism", ism.as_entire_binding()),
                 ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("surface", surface.as_entire_binding()),
                 ("indirect", output.as_entire_binding()),
             ],
         );

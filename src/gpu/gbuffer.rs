@@ -4,7 +4,8 @@
 //! offset inside every pixel ([`subsample`]): tile (i, j) is drawn with the projection moved
 //! by that offset ([`jittered`]) into its own viewport (see docs/antialiasing.md).
 
-use super::bindings::{gpu_struct, Group, Pass};
+use super::bindings::{gpu_struct, Elem, Group, Pass};
+use super::common::Tri;
 use super::Gpu;
 use glam::{Mat4, Vec2, Vec3};
 
@@ -19,10 +20,25 @@ gpu_struct! {
 
 pub(crate) const PASS: Pass = Pass {
     name: "gbuffer",
-    wgsl: include_str!("../../shaders/gbuffer.wgsl"),
+    wgsl: concat!(
+        include_str!("../../shaders/texture.wgsl"),
+        include_str!("../../shaders/gbuffer.wgsl")
+    ),
+    // The texturing data: alpha MASK cut-outs are discarded (see `texture.wgsl`).
     groups: &[Group {
-        stages: wgpu::ShaderStages::VERTEX,
-        bindings: &[super::bindings::dynamic_uniform("cam", &Camera::LAYOUT)],
+        stages: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        bindings: &[
+            super::bindings::dynamic_uniform("cam", &Camera::LAYOUT),
+            super::bindings::params("cut", &super::surface::Cutouts::LAYOUT),
+            super::bindings::read("tris", Elem::Struct(&Tri::LAYOUT)),
+            super::bindings::read("attrs", Elem::Struct(&super::surface::TriAttr::LAYOUT)),
+            super::bindings::read(
+                "materials",
+                Elem::Struct(&super::surface::SurfaceMaterial::LAYOUT),
+            ),
+            super::bindings::read("textures", Elem::Struct(&super::surface::TexInfo::LAYOUT)),
+            super::bindings::read("texels", Elem::Plain(4)),
+        ],
     }],
 };
 
@@ -123,7 +139,12 @@ pub(crate) fn target(
 
 impl GBuffer {
     /// The G-buffer of a `width x height` image with `aa x aa` sub-samples per pixel.
-    pub fn new(gpu: &Gpu, width: u32, height: u32, aa: u32) -> Self {
+    pub fn new(
+        gpu: &Gpu,
+        (width, height, aa): (u32, u32, u32),
+        textures: &super::surface::TextureData,
+        tris: &wgpu::Buffer,
+    ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
         let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
@@ -138,7 +159,9 @@ impl GBuffer {
             offset: 0,
             size: wgpu::BufferSize::new(std::mem::size_of::<Camera>() as u64),
         });
-        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &[("cam", cam)]);
+        let mut resources = vec![("cam", cam)];
+        resources.extend(textures.resources(tris));
+        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &resources);
         let (gw, gh) = (width * aa, height * aa);
         let view = target(gpu, "gbuffer", gw, gh, 1, FORMAT, true).create_view(&Default::default());
         let depth = target(

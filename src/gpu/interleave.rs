@@ -6,7 +6,7 @@
 //! every pixel's filtered value is an unbiased estimate of the full gather.
 
 use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Tri};
+use super::common::{Params, Surface, Tri};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -20,6 +20,7 @@ pub(crate) const PASS: Pass = Pass {
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("subsets", Elem::Plain(16)),
             read_write("indirect", Elem::Plain(16)),
+            read("surface", Elem::Struct(&Surface::LAYOUT)),
         ],
     }],
 };
@@ -35,7 +36,7 @@ impl Interleave {
         gpu: &Gpu,
         params: &wgpu::Buffer,
         tris: &wgpu::Buffer,
-        gbuf: &wgpu::TextureView,
+        (gbuf, surface): (&wgpu::TextureView, &wgpu::Buffer),
         subsets: &wgpu::Buffer,
         pixels: u64,
     ) -> Self {
@@ -51,6 +52,7 @@ impl Interleave {
                 ("P", params.as_entire_binding()),
                 ("tris", tris.as_entire_binding()),
                 ("gbuf", wgpu::BindingResource::TextureView(gbuf)),
+                ("surface", surface.as_entire_binding()),
                 ("subsets", subsets.as_entire_binding()),
                 ("indirect", output.as_entire_binding()),
             ],

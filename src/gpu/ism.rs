@@ -74,7 +74,9 @@ pub(crate) const PULL_PUSH: Pass = Pass {
     ],
 };
 
-/// `count` points on `frame`'s surfaces in proportion to area, in random order.
+/// `count` points on `frame`'s surfaces in proportion to area, in random order; points an
+/// alpha MASK cuts away are drawn again (up to 64 times, so a scene cut away everywhere
+/// still ends).
 pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
     let mut cdf = Vec::with_capacity(frame.areas.len());
     let mut acc = 0.0f64;
@@ -83,11 +85,24 @@ pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
         cdf.push(acc);
     }
     let mut r = rng(&[seed, 0x15a]);
+    let cutouts = frame.has_cutouts();
     (0..count)
         .map(|_| {
-            let u = r.random::<f64>() * acc;
-            let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
-            let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
+            let mut draw = || {
+                let u = r.random::<f64>() * acc;
+                let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+                (
+                    tri,
+                    triangle_barycentrics(Vec2::new(r.random(), r.random())),
+                )
+            };
+            let (mut tri, mut b) = draw();
+            for _ in 0..64 {
+                if !cutouts || !frame.cut_at(tri, b.x, b.y) {
+                    break;
+                }
+                (tri, b) = draw();
+            }
             Point {
                 tri: tri as u32,
                 b1: b.x,

@@ -15,6 +15,7 @@ pub mod radiosity;
 pub mod renderer;
 pub mod resolve;
 pub mod shadow;
+pub mod surface;
 
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
@@ -128,7 +129,7 @@ pub fn adapters(choice: BackendChoice) -> Vec<(AdapterDesc, bool)> {
 fn usable(a: &wgpu::Adapter) -> bool {
     let d = a.get_downlevel_capabilities();
     d.flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
-        && a.limits().max_storage_buffers_per_shader_stage >= 6
+        && a.limits().max_storage_buffers_per_shader_stage >= 8
         && a.limits().max_compute_workgroup_size_x >= 64
 }
 

@@ -92,8 +92,9 @@ pub struct RenderedImage {
 }
 
 /// The passes of a frame, in order, as timings name them.
-pub const PASSES: [&str; 9] = [
+pub const PASSES: [&str; 10] = [
     "gbuffer",
+    "surface",
     "shadow_maps",
     "direct",
     "ism_splat",
@@ -169,6 +170,8 @@ pub struct Renderer {
     vpls: wgpu::Buffer,
     lights: wgpu::Buffer,
     gbuffer: GBuffer,
+    /// Each sample's albedo and emission (scenes with textures or vertex colours).
+    surface: Option<super::surface::SurfacePass>,
     shadows: ShadowMaps,
     direct: Direct,
     ism: ism::Ism,
@@ -309,15 +312,28 @@ impl Renderer {
         let (gw, gh) = c.grid();
         let pixels = gw as u64 * gh as u64;
         let out_pixels = c.width as u64 * c.height as u64;
-        let gbuffer = GBuffer::new(&gpu, c.width, c.height, c.aa);
-        let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples);
+        let texture_data = super::surface::TextureData::new(&gpu, points_frame)?;
+        let gbuffer = GBuffer::new(&gpu, (c.width, c.height, c.aa), &texture_data, &tris);
+        let surface_buf = gpu.buffer(
+            "surface",
+            bytes::<super::common::Surface>(pixels),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let surface = super::surface::SurfacePass::new(
+            &gpu,
+            &texture_data,
+            &params,
+            &tris,
+            (&gbuffer.view, &surface_buf),
+        );
+        let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples, &texture_data, &tris);
         let direct = Direct::new(
             &gpu,
             &params,
             &tris,
             &lights,
             &shadows.array_view,
-            &gbuffer.view,
+            (&gbuffer.view, &surface_buf),
             pixels,
         );
         let ism = ism::Ism::new(
@@ -337,17 +353,25 @@ impl Renderer {
             &tris,
             &vpls,
             &ism.pyramid,
-            &gbuffer.view,
+            (&gbuffer.view, &surface_buf),
             pixels,
         );
-        let interleave = (c.interleave > 1)
-            .then(|| Interleave::new(&gpu, &params, &tris, &gbuffer.view, &gather.output, pixels));
+        let interleave = (c.interleave > 1).then(|| {
+            Interleave::new(
+                &gpu,
+                &params,
+                &tris,
+                (&gbuffer.view, &surface_buf),
+                &gather.output,
+                pixels,
+            )
+        });
         let indirect = interleave.as_ref().map_or(&gather.output, |f| &f.output);
         let compose = Compose::new(
             &gpu,
             &params,
             &tris,
-            &gbuffer.view,
+            (&gbuffer.view, &surface_buf),
             (&direct.output, indirect),
             pixels,
             c.aa > 1,
@@ -393,6 +417,7 @@ impl Renderer {
             vpls,
             lights,
             gbuffer,
+            surface,
             shadows,
             direct,
             ism,
@@ -574,7 +599,7 @@ impl Renderer {
             shift_y: self.interleave_shift.1 % c.interleave,
             aa: c.aa,
             near_points: self.near_points(input),
-            _pad0: 0,
+            textured: self.surface.is_some() as u32,
             _pad1: 0,
             _pad2: 0,
         };
@@ -614,6 +639,12 @@ impl Renderer {
             * f.camera.view();
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
+        rec.end_pass()?;
+        // surface: G-buffer, triangles, UVs, colours, textures -> each sample's albedo and
+        // emission (scenes with textures or vertex colours; the others use the triangle's).
+        if let Some(s) = &self.surface {
+            s.encode(&mut rec.enc, gw, gh);
+        }
         rec.end_pass()?;
         // shadow_maps: vertices, emitter samples -> hemicube distances (kept while still).
         let drawn = self.shadows.encode(

@@ -6,7 +6,8 @@
 //! fits it (within 45 degrees); a directional light draws one orthographic map along its
 //! direction over the square that covers the geometry, storing depth along the direction.
 
-use super::bindings::{dynamic_uniform, gpu_struct, Group, Pass};
+use super::bindings::{dynamic_uniform, gpu_struct, Elem, Group, Pass};
+use super::common::Tri;
 use super::{gbuffer, Gpu};
 use crate::scene::{EmitterSample, SampleKind};
 use glam::Vec3;
@@ -31,10 +32,25 @@ gpu_struct! {
 
 pub(crate) const PASS: Pass = Pass {
     name: "shadow",
-    wgsl: include_str!("../../shaders/shadow.wgsl"),
+    wgsl: concat!(
+        include_str!("../../shaders/texture.wgsl"),
+        include_str!("../../shaders/shadow.wgsl")
+    ),
+    // The texturing data: alpha MASK cut-outs cast no shadow (see `texture.wgsl`).
     groups: &[Group {
         stages: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        bindings: &[dynamic_uniform("F", &Face::LAYOUT)],
+        bindings: &[
+            dynamic_uniform("F", &Face::LAYOUT),
+            super::bindings::params("cut", &super::surface::Cutouts::LAYOUT),
+            super::bindings::read("tris", Elem::Struct(&Tri::LAYOUT)),
+            super::bindings::read("attrs", Elem::Struct(&super::surface::TriAttr::LAYOUT)),
+            super::bindings::read(
+                "materials",
+                Elem::Struct(&super::surface::SurfaceMaterial::LAYOUT),
+            ),
+            super::bindings::read("textures", Elem::Struct(&super::surface::TexInfo::LAYOUT)),
+            super::bindings::read("texels", Elem::Plain(4)),
+        ],
     }],
 };
 
@@ -60,7 +76,13 @@ pub struct ShadowMaps {
 }
 
 impl ShadowMaps {
-    pub fn new(gpu: &Gpu, size: u32, samples: u32) -> Self {
+    pub fn new(
+        gpu: &Gpu,
+        size: u32,
+        samples: u32,
+        textures: &super::surface::TextureData,
+        tris: &wgpu::Buffer,
+    ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
         let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
@@ -77,7 +99,9 @@ impl ShadowMaps {
             offset: 0,
             size: wgpu::BufferSize::new(std::mem::size_of::<Face>() as u64),
         });
-        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &[("F", face)]);
+        let mut resources = vec![("F", face)];
+        resources.extend(textures.resources(tris));
+        let bind_group = PASS.groups[0].bind(gpu, PASS.name, &layout, &resources);
         let tex = gbuffer::target(gpu, "shadow maps", size, size, n, FORMAT, true);
         let layers = (0..n)
             .map(|l| {

@@ -365,6 +365,9 @@ impl Mesh {
             emitter_of_tri: vec![u32::MAX; tris.len()],
             tris,
             materials: frame.materials.clone(),
+            // Elements take their materials' factors (textures are not resolved per element).
+            textures: frame.textures.clone(),
+            attrs: None,
             camera: frame.camera,
             emitters: Default::default(),
         }

@@ -74,7 +74,7 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
         let ng = frame.normals[tri];
         let front = ng.dot(d) < 0.0;
         let n = if front { ng } else { -ng };
-        let le = frame.emission(tri);
+        let le = frame.emission_at(tri, h.b1, h.b2);
         if front && le.max_element() > 0.0 {
             if pdf_bsdf == 0.0 {
                 l += beta * le;
@@ -84,7 +84,7 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
                 l += beta * le * (pdf_bsdf * pdf_bsdf / (pdf_bsdf * pdf_bsdf + pl * pl));
             }
         }
-        let rho = frame.albedo(tri);
+        let rho = frame.albedo_at(tri, h.b1, h.b2);
         if rho.max_element() <= 0.0 {
             break;
         }
@@ -104,7 +104,7 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
                 let pl = light_pdf(frame, lt, d2, cos_l);
                 let pb = cos_x / PI;
                 let mis = pl * pl / (pl * pl + pb * pb);
-                l += beta * rho / PI * frame.emission(lt) * (cos_x / pl * mis);
+                l += beta * rho / PI * frame.emission_at(lt, b.x, b.y) * (cos_x / pl * mis);
             }
         }
         // Next-event estimation on the punctual lights: each of them when there are at most

@@ -16,6 +16,8 @@ pub struct SurfacePoint {
     pub x: Vec3,
     pub n: Vec3,
     pub tri: u32,
+    /// Barycentrics of `x` in `tri`.
+    pub b: Vec2,
 }
 
 /// The surface seen through each pixel centre (None: nothing), row 0 at the top.
@@ -38,6 +40,7 @@ pub fn pixel_points(
                         x: frame.point(h.tri as usize, h.b1, h.b2),
                         n: if ng.dot(d) < 0.0 { ng } else { -ng },
                         tri: h.tri,
+                        b: Vec2::new(h.b1, h.b2),
                     }
                 })
         })
@@ -69,7 +72,7 @@ pub fn gather(
         let Some(s) = points[i] else {
             return Vec3::ZERO;
         };
-        let rho = frame.albedo(s.tri as usize);
+        let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
         vpls.iter()
             .map(|v| {
                 let c = v.radiance_at(s.x, s.n, rho, dmin);
@@ -96,7 +99,7 @@ pub fn direct(
         let Some(s) = points[i] else {
             return Vec3::ZERO;
         };
-        let rho = frame.albedo(s.tri as usize);
+        let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
         samples
             .iter()
             .filter_map(|l| l.irradiance_at(s.x, s.n))
@@ -110,7 +113,7 @@ pub fn direct(
 pub fn emission(frame: &Frame, points: &[Option<SurfacePoint>], width: u32, height: u32) -> Hdr {
     image(width, height, |i| match points[i] {
         Some(s) if frame.normals[s.tri as usize].dot(frame.camera.position - s.x) > 0.0 => {
-            frame.emission(s.tri as usize)
+            frame.emission_at(s.tri as usize, s.b.x, s.b.y)
         }
         _ => Vec3::ZERO,
     })

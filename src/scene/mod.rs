@@ -9,16 +9,21 @@ pub mod framing;
 pub mod inspect;
 pub mod lights;
 pub mod load;
+pub mod texture;
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 pub use anim::{Channel, Interpolation, Property};
 pub use camera::Camera;
 pub use lights::{LightDef, LightKind, PunctualLight};
+pub use texture::{TexRef, Texture};
 
 /// A Lambertian material: albedo `rho` and emitted radiance `Le` (front face only, unless
 /// `double_sided`: then [`Scene::at`] adds a back-facing twin of each emitting triangle).
+/// At a surface point the albedo is `albedo` times the base colour texture times the
+/// vertex colour, the emission `emission` times the emissive texture (see
+/// [`Frame::albedo_at`]); `albedo` and `emission` alone are the factors.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -26,14 +31,61 @@ pub struct Material {
     pub emission: Vec3,
     /// glTF's doubleSided: an emitting surface emits from both sides.
     pub double_sided: bool,
+    /// baseColorTexture: multiplies `albedo` (and its alpha `alpha`).
+    pub base_color_texture: Option<TexRef>,
+    /// emissiveTexture: multiplies `emission`.
+    pub emissive_texture: Option<TexRef>,
+    /// baseColorFactor's alpha.
+    pub alpha: f32,
+    /// alphaMode MASK: where the alpha (factor x texture x vertex colour) is under this
+    /// cutoff the surface is not there (no hit, no shadow, no VPL, not drawn).
+    pub alpha_cutoff: Option<f32>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            name: String::new(),
+            albedo: Vec3::ONE,
+            emission: Vec3::ZERO,
+            double_sided: false,
+            base_color_texture: None,
+            emissive_texture: None,
+            alpha: 1.0,
+            alpha_cutoff: None,
+        }
+    }
+}
+
+impl Material {
+    /// Whether anything in it varies over a surface (textures or a cut-out).
+    pub fn varies(&self) -> bool {
+        self.base_color_texture.is_some()
+            || self.emissive_texture.is_some()
+            || self.alpha_cutoff.is_some()
+    }
 }
 
 /// One triangle list with one material, in its node's local space.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Primitive {
     pub positions: Vec<Vec3>,
     pub indices: Vec<u32>,
     pub material: usize,
+    /// TEXCOORD_0 and TEXCOORD_1, one per position.
+    pub uv: [Option<Vec<Vec2>>; 2],
+    /// COLOR_0 (linear RGBA), one per position.
+    pub colors: Option<Vec<Vec4>>,
+}
+
+/// Per-triangle vertex attributes of a frame, in its triangle order and vertex order (the
+/// barycentrics (b1, b2) of a hit weigh corners 1 and 2).
+#[derive(Clone, Debug, Default)]
+pub struct TriAttrs {
+    /// TEXCOORD_0 and TEXCOORD_1 of the three corners (zero where the mesh has none).
+    pub uv: Vec<[[Vec2; 3]; 2]>,
+    /// COLOR_0 of the three corners (one where the mesh has none).
+    pub color: Vec<[Vec4; 3]>,
 }
 
 /// A node's local transform.
@@ -94,6 +146,8 @@ pub struct Scene {
     /// A framing camera used when the file has none.
     pub default_camera: Camera,
     pub channels: Vec<Channel>,
+    /// The images the materials' textures read.
+    pub textures: Arc<Vec<Texture>>,
     /// Warnings raised while loading (one per kind of thing ignored).
     pub warnings: Vec<String>,
     /// A translation above every root: moves a scene that lies far from the origin back to
@@ -186,6 +240,10 @@ pub struct Frame {
     pub normals: Vec<Vec3>,
     pub areas: Vec<f32>,
     pub materials: Arc<Vec<Material>>,
+    pub textures: Arc<Vec<Texture>>,
+    /// Vertex attributes, where a material has a texture or a mesh has vertex colours (None:
+    /// every surface is its material's factors).
+    pub attrs: Option<Arc<TriAttrs>>,
     pub camera: Camera,
     pub emitters: Emitters,
     /// For each triangle, its index in `emitters.tris`, or `u32::MAX`.
@@ -193,11 +251,105 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// The material's albedo factor (the mean albedo of an untextured triangle without vertex
+    /// colours; [`Frame::albedo_at`] is the albedo at a point).
     pub fn albedo(&self, tri: usize) -> Vec3 {
         self.materials[self.tri_material[tri] as usize].albedo
     }
+    /// The material's emission factor ([`Frame::emission_at`] is the emission at a point).
     pub fn emission(&self, tri: usize) -> Vec3 {
         self.materials[self.tri_material[tri] as usize].emission
+    }
+
+    /// A texture's value at barycentrics (b1, b2) of triangle `tri`.
+    fn texture_at(&self, r: &TexRef, tri: usize, b1: f32, b2: f32) -> Vec4 {
+        let Some(a) = &self.attrs else {
+            return Vec4::ONE;
+        };
+        let uv = a.uv[tri][r.texcoord.min(1) as usize];
+        let p = uv[0] * (1.0 - b1 - b2) + uv[1] * b1 + uv[2] * b2;
+        match self.textures.get(r.texture) {
+            Some(t) => t.sample(r.apply(p)),
+            None => Vec4::ONE,
+        }
+    }
+
+    fn color_at(&self, tri: usize, b1: f32, b2: f32) -> Vec4 {
+        match &self.attrs {
+            Some(a) => {
+                let c = a.color[tri];
+                c[0] * (1.0 - b1 - b2) + c[1] * b1 + c[2] * b2
+            }
+            None => Vec4::ONE,
+        }
+    }
+
+    /// Albedo and alpha at barycentrics (b1, b2): factor x base colour texture x vertex colour.
+    pub fn base_color_at(&self, tri: usize, b1: f32, b2: f32) -> Vec4 {
+        let m = &self.materials[self.tri_material[tri] as usize];
+        let mut c = m.albedo.extend(m.alpha);
+        if self.attrs.is_none() {
+            return c;
+        }
+        if let Some(r) = &m.base_color_texture {
+            c *= self.texture_at(r, tri, b1, b2);
+        }
+        c * self.color_at(tri, b1, b2)
+    }
+
+    /// Albedo at barycentrics (b1, b2) of triangle `tri`.
+    pub fn albedo_at(&self, tri: usize, b1: f32, b2: f32) -> Vec3 {
+        self.base_color_at(tri, b1, b2).truncate()
+    }
+
+    /// Emitted radiance at barycentrics (b1, b2): factor x emissive texture.
+    pub fn emission_at(&self, tri: usize, b1: f32, b2: f32) -> Vec3 {
+        let m = &self.materials[self.tri_material[tri] as usize];
+        match &m.emissive_texture {
+            Some(r) if m.emission.max_element() > 0.0 => {
+                m.emission * self.texture_at(r, tri, b1, b2).truncate()
+            }
+            _ => m.emission,
+        }
+    }
+
+    /// Whether the point at barycentrics (b1, b2) is cut away by an alpha MASK.
+    pub fn cut_at(&self, tri: usize, b1: f32, b2: f32) -> bool {
+        let m = &self.materials[self.tri_material[tri] as usize];
+        match m.alpha_cutoff {
+            Some(cut) => self.base_color_at(tri, b1, b2).w < cut,
+            None => false,
+        }
+    }
+
+    /// The mean emitted radiance over triangle `tri`: the factor, or with an emissive texture
+    /// its mean over a 32 x 32 stratified lattice of points of the triangle (so that emitters
+    /// are chosen by their power; the points sampled on them carry their own radiance).
+    pub fn mean_emission(&self, tri: usize) -> Vec3 {
+        let m = &self.materials[self.tri_material[tri] as usize];
+        if m.emissive_texture.is_none() || self.attrs.is_none() || m.emission.max_element() <= 0.0 {
+            return m.emission;
+        }
+        const N: u32 = 32;
+        let mut sum = Vec3::ZERO;
+        for i in 0..N {
+            for j in 0..N {
+                // The centre of cell (i, j) of the unit square, folded onto the triangle.
+                let (u, v) = ((i as f32 + 0.5) / N as f32, (j as f32 + 0.5) / N as f32);
+                let (b1, b2) = if u + v > 1.0 {
+                    (1.0 - u, 1.0 - v)
+                } else {
+                    (u, v)
+                };
+                sum += self.emission_at(tri, b1, b2);
+            }
+        }
+        sum / (N * N) as f32
+    }
+
+    /// Whether any triangle can be cut away (ray casting then tests every hit).
+    pub fn has_cutouts(&self) -> bool {
+        self.attrs.is_some() && self.materials.iter().any(|m| m.alpha_cutoff.is_some())
     }
     /// A point on a triangle from barycentrics (b1, b2).
     pub fn point(&self, tri: usize, b1: f32, b2: f32) -> Vec3 {
@@ -308,9 +460,12 @@ impl Scene {
     /// World-space triangles and their materials in depth-first node order. A node whose
     /// world matrix mirrors (negative determinant) has its winding flipped, so that front
     /// faces stay front faces (glTF 2.0 section 3.7.4).
-    fn triangles(&self, world: &[Mat4]) -> (Vec<[Vec3; 3]>, Vec<u32>) {
+    fn triangles(&self, world: &[Mat4]) -> (Vec<[Vec3; 3]>, Vec<u32>, Option<TriAttrs>) {
         let mut tris = Vec::new();
         let mut tri_material = Vec::new();
+        let needs_attrs = self.materials.iter().any(Material::varies)
+            || self.meshes.iter().flatten().any(|p| p.colors.is_some());
+        let mut attrs = needs_attrs.then(TriAttrs::default);
         let mut order = Vec::new();
         let mut stack: Vec<usize> = self.roots.iter().rev().copied().collect();
         while let Some(n) = stack.pop() {
@@ -334,19 +489,36 @@ impl Scene {
                     .map(|&p| m.transform_point3(p))
                     .collect();
                 for idx in prim.indices.chunks_exact(3) {
-                    tris.push([p[idx[0] as usize], p[idx[b] as usize], p[idx[c] as usize]]);
+                    let corners = [idx[0] as usize, idx[b] as usize, idx[c] as usize];
+                    tris.push(corners.map(|k| p[k]));
                     tri_material.push(prim.material as u32);
+                    if let Some(a) = &mut attrs {
+                        let uv = |set: usize| match &prim.uv[set] {
+                            Some(uv) => corners.map(|k| uv.get(k).copied().unwrap_or(Vec2::ZERO)),
+                            None => [Vec2::ZERO; 3],
+                        };
+                        a.uv.push([uv(0), uv(1)]);
+                        a.color.push(match &prim.colors {
+                            Some(col) => corners.map(|k| col.get(k).copied().unwrap_or(Vec4::ONE)),
+                            None => [Vec4::ONE; 3],
+                        });
+                    }
                 }
             }
         }
-        self.add_back_emitters(&mut tris, &mut tri_material);
-        (tris, tri_material)
+        self.add_back_emitters(&mut tris, &mut tri_material, attrs.as_mut());
+        (tris, tri_material, attrs)
     }
 
     /// For each triangle of a double-sided emitting material, a twin with the opposite
     /// winding 1e-4 of the scene's size behind it, so that the back emits too while every
     /// stage keeps treating emitters as one-sided (appended, so indices stay stable).
-    fn add_back_emitters(&self, tris: &mut Vec<[Vec3; 3]>, mats: &mut Vec<u32>) {
+    fn add_back_emitters(
+        &self,
+        tris: &mut Vec<[Vec3; 3]>,
+        mats: &mut Vec<u32>,
+        mut attrs: Option<&mut TriAttrs>,
+    ) {
         let two_sided = |m: u32| {
             let m = &self.materials[m as usize];
             m.double_sided && m.emission.max_element() > 0.0
@@ -362,6 +534,13 @@ impl Scene {
                 let back = -(b - a).cross(c - a).normalize_or_zero() * gap;
                 tris.push([a + back, c + back, b + back]);
                 mats.push(mats[i]);
+                if let Some(at) = attrs.as_deref_mut() {
+                    let swap = |[x, y, z]: [Vec2; 3]| [x, z, y];
+                    let [u0, u1] = at.uv[i];
+                    at.uv.push([swap(u0), swap(u1)]);
+                    let [x, y, z] = at.color[i];
+                    at.color.push([x, z, y]);
+                }
             }
         }
     }
@@ -418,7 +597,7 @@ impl Scene {
     /// Evaluates the scene at time `t` (seconds).
     pub fn at(&self, t: f32) -> Frame {
         let world = self.world_matrices(t);
-        let (tris, tri_material) = self.triangles(&world);
+        let (tris, tri_material, attrs) = self.triangles(&world);
         let mut normals = Vec::with_capacity(tris.len());
         let mut areas = Vec::with_capacity(tris.len());
         for [a, b, c] in &tris {
@@ -426,14 +605,34 @@ impl Scene {
             areas.push(0.5 * cr.length());
             normals.push(cr.normalize_or_zero());
         }
+        let camera = match self.camera_node {
+            Some(n) => Camera::from_world(world[n], self.nodes[n].camera.map_or(0.7, |c| c.yfov)),
+            None => self.default_camera,
+        };
+        // A camera scaled to nothing between the times the loader checked: the framing one.
+        let camera = Some(camera)
+            .filter(Camera::is_valid)
+            .unwrap_or(self.default_camera);
+        let mut frame = Frame {
+            time: t,
+            emitter_of_tri: vec![u32::MAX; tris.len()],
+            tris,
+            tri_material,
+            normals,
+            areas,
+            materials: self.materials.clone(),
+            textures: self.textures.clone(),
+            attrs: attrs.map(Arc::new),
+            camera,
+            emitters: Emitters::default(),
+        };
         let mut emitters = Emitters::default();
-        let mut emitter_of_tri = vec![u32::MAX; tris.len()];
         let mut acc = 0.0f32;
-        for (i, &mat) in tri_material.iter().enumerate() {
-            let le = self.materials[mat as usize].emission;
-            if le.max_element() > 0.0 && areas[i] > 0.0 {
-                let power = le * std::f32::consts::PI * areas[i];
-                emitter_of_tri[i] = emitters.tris.len() as u32;
+        for i in 0..frame.tris.len() {
+            let le = frame.mean_emission(i);
+            if le.max_element() > 0.0 && frame.areas[i] > 0.0 {
+                let power = le * std::f32::consts::PI * frame.areas[i];
+                frame.emitter_of_tri[i] = emitters.tris.len() as u32;
                 emitters.tris.push(i as u32);
                 emitters.power.push(power);
                 emitters.total_power += power;
@@ -444,32 +643,15 @@ impl Scene {
         for c in &mut emitters.cdf {
             *c /= acc;
         }
-        let (lo, hi) = bounds(tris.iter().flatten().copied());
-        emitters.sphere = if tris.is_empty() {
+        let (lo, hi) = frame.bounds();
+        emitters.sphere = if frame.tris.is_empty() {
             (Vec3::ZERO, 1.0)
         } else {
             ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
         };
         self.place_lights(&world, &mut emitters);
-        let camera = match self.camera_node {
-            Some(n) => Camera::from_world(world[n], self.nodes[n].camera.map_or(0.7, |c| c.yfov)),
-            None => self.default_camera,
-        };
-        // A camera scaled to nothing between the times the loader checked: the framing one.
-        let camera = Some(camera)
-            .filter(Camera::is_valid)
-            .unwrap_or(self.default_camera);
-        Frame {
-            time: t,
-            tris,
-            tri_material,
-            normals,
-            areas,
-            materials: self.materials.clone(),
-            camera,
-            emitters,
-            emitter_of_tri,
-        }
+        frame.emitters = emitters;
+        frame
     }
 }
 
@@ -585,7 +767,8 @@ impl Frame {
             EmitterSample {
                 position: self.point(tri, b.x, b.y),
                 normal: self.normals[tri],
-                radiance: self.emission(tri) * (self.areas[tri] / (p_e * count as f32)),
+                radiance: self.emission_at(tri, b.x, b.y)
+                    * (self.areas[tri] / (p_e * count as f32)),
                 kind: SampleKind::Area,
                 reach: 0.0,
             }

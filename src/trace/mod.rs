@@ -25,6 +25,18 @@ pub struct Tracer {
     pub last_build_s: f64,
     /// Scale of the scene, for ray offsets.
     eps: f32,
+    /// The frame, kept when an alpha MASK can cut its triangles: a hit on a cut-away point
+    /// is passed through.
+    cutouts: Option<Box<Frame>>,
+}
+
+/// Barycentrics (b1, b2) of point `p` on triangle `t`, from areas (robust for any winding).
+fn barycentrics(t: &Triangle, p: Vec3A) -> (f32, f32) {
+    let n = (t.v1 - t.v0).cross(t.v2 - t.v0);
+    let inv = 1.0 / n.length_squared();
+    let b1 = (t.v2 - t.v0).cross(p - t.v0).dot(-n) * inv;
+    let b2 = (t.v1 - t.v0).cross(p - t.v0).dot(n) * inv;
+    (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0))
 }
 
 fn to_obvhs(frame: &Frame) -> Vec<Triangle> {
@@ -59,7 +71,25 @@ impl Tracer {
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
             eps: 1e-4 * (hi - lo).max_element().max(1e-3),
+            cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
         }
+    }
+
+    /// Distance to triangle `id` of the BVH along `r`, or infinity (a miss, or a point an
+    /// alpha MASK cuts away).
+    fn hit_distance(&self, r: &Ray, id: usize) -> f32 {
+        let k = self.bvh.primitive_indices[id] as usize;
+        let t = self.tris[k].intersect(r);
+        if let Some(f) = &self.cutouts {
+            if t < f32::INFINITY {
+                let p = r.origin + r.direction * t;
+                let (b1, b2) = barycentrics(&self.tris[k], p);
+                if f.cut_at(k, b1, b2) {
+                    return f32::INFINITY;
+                }
+            }
+        }
+        t
     }
 
     /// Brings the BVH to `frame`'s geometry; rebuilds only if a vertex moved. Returns whether
@@ -88,22 +118,18 @@ impl Tracer {
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
         let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         let mut hit = RayHit::none();
-        if self.bvh.ray_traverse(ray, &mut hit, |r, id| {
-            self.tris[self.bvh.primitive_indices[id] as usize].intersect(r)
-        }) {
+        if self
+            .bvh
+            .ray_traverse(ray, &mut hit, |r, id| self.hit_distance(r, id))
+        {
             let tri = self.bvh.primitive_indices[hit.primitive_id as usize];
-            let t = &self.tris[tri as usize];
-            // Barycentrics of the hit point, from areas (robust for any winding).
             let p: Vec3A = Vec3A::from(origin) + Vec3A::from(dir) * hit.t;
-            let n = (t.v1 - t.v0).cross(t.v2 - t.v0);
-            let inv = 1.0 / n.length_squared();
-            let b1 = (t.v2 - t.v0).cross(p - t.v0).dot(-n) * inv;
-            let b2 = (t.v1 - t.v0).cross(p - t.v0).dot(n) * inv;
+            let (b1, b2) = barycentrics(&self.tris[tri as usize], p);
             Some(Hit {
                 t: hit.t,
                 tri,
-                b1: b1.clamp(0.0, 1.0),
-                b2: b2.clamp(0.0, 1.0),
+                b1,
+                b2,
             })
         } else {
             None
@@ -122,9 +148,9 @@ impl Tracer {
             return false;
         }
         let ray = Ray::new(a.into(), (d / len).into(), 0.0, len * (1.0 - 1e-4));
-        !self.bvh.ray_traverse_miss(ray, |r, id| {
-            self.tris[self.bvh.primitive_indices[id] as usize].intersect(r)
-        })
+        !self
+            .bvh
+            .ray_traverse_miss(ray, |r, id| self.hit_distance(r, id))
     }
 
     /// Offsets a surface point off its triangle, to the side `dir` leaves from.

@@ -55,7 +55,7 @@ pub fn camera_points(
             Some(CameraPoint {
                 x: frame.point(h.tri as usize, h.b1, h.b2),
                 n: if ng.dot(d) < 0.0 { ng } else { -ng },
-                albedo: frame.albedo(h.tri as usize),
+                albedo: frame.albedo_at(h.tri as usize, h.b1, h.b2),
             })
         })
         .collect()

@@ -58,7 +58,8 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let x = frame.point(tri, b.x, b.y);
         let dir = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
         // Le * cos / (p_e / A * cos / pi)
-        let power = frame.emission(tri) * (std::f32::consts::PI * frame.areas[tri] / (p_e * share));
+        let power = frame.emission_at(tri, b.x, b.y)
+            * (std::f32::consts::PI * frame.areas[tri] / (p_e * share));
         (tracer.offset(x, n, dir), dir, power)
     } else {
         let v = ((u - share) / (1.0 - share)).min(1.0 - 1e-7);
@@ -77,7 +78,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
-        let albedo = frame.albedo(tri);
+        let albedo = frame.albedo_at(tri, h.b1, h.b2);
         out.push(Vpl {
             position: x,
             normal: nf,

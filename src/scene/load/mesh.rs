@@ -1,10 +1,11 @@
-//! Meshes: each primitive's positions and indices as a triangle list in its node's space.
-//! Triangle strips and fans become lists with glTF's winding; points and lines are skipped.
+//! Meshes: each primitive's positions and indices as a triangle list in its node's space,
+//! with TEXCOORD_0, TEXCOORD_1 and COLOR_0 where it has them. Triangle strips and fans become
+//! lists with glTF's winding; points and lines are skipped.
 
 use super::buffers::{self, Buffers};
 use super::{Ctx, LoadError, MAX_COORD};
 use crate::scene::Primitive;
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 use gltf::mesh::{Mode, Semantic};
 use std::collections::BTreeSet;
 
@@ -71,11 +72,76 @@ fn primitive(
             positions.len()
         )));
     }
+    let n = positions.len();
+    let uv = [0, 1].map(|set| {
+        let acc = prim.get(&Semantic::TexCoords(set))?;
+        let what = format!("TEXCOORD_{set} of mesh {}", mesh.index());
+        vertex_attribute(cx, buffers, &acc, &what, n, 2)
+            .map(|f| f.chunks_exact(2).map(Vec2::from_slice).collect())
+    });
+    let colors = prim.get(&Semantic::Colors(0)).and_then(|acc| {
+        let what = format!("COLOR_0 of mesh {}", mesh.index());
+        let w = buffers::width(acc.dimensions());
+        if w != 3 && w != 4 {
+            cx.warn(format!("{what} is neither VEC3 nor VEC4 and is ignored"));
+            return None;
+        }
+        vertex_attribute(cx, buffers, &acc, &what, n, w).map(|f| {
+            f.chunks_exact(w)
+                .map(|c| {
+                    let a = if w == 4 { c[3] } else { 1.0 };
+                    Vec4::new(c[0], c[1], c[2], a).clamp(Vec4::ZERO, Vec4::ONE)
+                })
+                .collect()
+        })
+    });
     Ok(Primitive {
         positions,
         indices: triangle_list(prim.mode(), &indices),
         material: prim.material().index().unwrap_or(default_material),
+        uv,
+        colors,
     })
+}
+
+/// A per-vertex attribute of `width` components, one per position, all finite; else a
+/// warning saying it is ignored.
+fn vertex_attribute(
+    cx: &mut Ctx,
+    buffers: &Buffers,
+    acc: &gltf::Accessor,
+    what: &str,
+    vertices: usize,
+    width: usize,
+) -> Option<Vec<f32>> {
+    if buffers::width(acc.dimensions()) != width {
+        cx.warn(format!("{what} has the wrong type and is ignored"));
+        return None;
+    }
+    let f = match buffers::floats(cx, buffers, acc, what) {
+        Ok(f) => f,
+        Err(e) => {
+            cx.warn(format!(
+                "{what} cannot be read and is ignored ({})",
+                e.reason
+            ));
+            return None;
+        }
+    };
+    if f.len() != vertices * width {
+        cx.warn(format!(
+            "{what} has {} values for {vertices} vertices and is ignored",
+            f.len() / width
+        ));
+        return None;
+    }
+    if f.iter().any(|x| !x.is_finite()) {
+        cx.warn(format!(
+            "{what} holds NaN or infinite values and is ignored"
+        ));
+        return None;
+    }
+    Some(f)
 }
 
 /// One warning per kind of vertex data irad does not use, saying what it changes.
@@ -85,8 +151,8 @@ fn warn_ignored(cx: &mut Ctx, prim: &gltf::Primitive) {
     }
     for (sem, _) in prim.attributes() {
         match sem {
-            Semantic::Colors(_) => cx.warn(
-                "vertex colours (COLOR_n) are ignored: surfaces take their material's baseColorFactor only",
+            Semantic::Colors(k) if k > 0 => cx.warn(
+                "vertex colours beyond COLOR_0 are ignored",
             ),
             Semantic::Normals => cx.warn(
                 "vertex normals (NORMAL) are ignored: each triangle is shaded flat with its geometric normal",

@@ -2,10 +2,11 @@
 //! of glTF it reads: `buffers` (buffers, views, accessors), `material`, `mesh` (primitives),
 //! `nodes` (the node tree and cameras), `lights` (KHR_lights_punctual) and `animation`.
 //!
-//! What irad uses: triangle meshes, node transforms, baseColorFactor (albedo),
-//! emissiveFactor x KHR_materials_emissive_strength (emitted radiance), KHR_lights_punctual
-//! lights, the first perspective camera, and node animations. Everything else is ignored
-//! with one warning per kind.
+//! What irad uses: triangle meshes, node transforms, baseColorFactor x baseColorTexture x
+//! COLOR_0 (albedo), emissiveFactor x KHR_materials_emissive_strength x emissiveTexture
+//! (emitted radiance), alpha MASK, KHR_texture_transform, KHR_lights_punctual lights, the
+//! first perspective camera, and node animations. Everything else is ignored with one
+//! warning per kind.
 
 mod animation;
 mod buffers;
@@ -14,6 +15,7 @@ mod lights;
 mod material;
 mod mesh;
 mod nodes;
+mod textures;
 
 pub use camera::FOV_RANGE;
 
@@ -36,6 +38,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_emissive_strength",
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
+    "KHR_texture_transform",
 ];
 
 /// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
@@ -96,7 +99,16 @@ pub fn load_slice(
     let doc = &gltf.document;
     let buffers = buffers::load(&cx, doc, base, gltf.blob.clone())?;
     warn_unused(&mut cx, doc);
-    let materials = material::read(&mut cx, doc)?;
+    let read = textures::read(&mut cx, doc, &buffers, base);
+    let mut index = Vec::with_capacity(read.len());
+    let mut textures = Vec::new();
+    for t in read {
+        index.push(t.map(|t| {
+            textures.push(t);
+            textures.len() - 1
+        }));
+    }
+    let materials = material::read(&mut cx, doc, &index)?;
     let meshes = mesh::read(&mut cx, doc, &buffers, materials.len() - 1)?;
     let lights = lights::read(&mut cx, doc)?;
     let mut graph = nodes::read(&mut cx, doc, lights.len())?;
@@ -111,6 +123,7 @@ pub fn load_slice(
         camera_node: graph.camera_node,
         default_camera: Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 0.7),
         channels,
+        textures: Arc::new(textures),
         warnings: Vec::new(),
         shift: Vec3::ZERO,
     };
@@ -174,9 +187,6 @@ fn warn_unused(cx: &mut Ctx, doc: &gltf::Document) {
         if !SUPPORTED_EXTENSIONS.contains(&ext) {
             cx.warn(format!("extension {ext} is ignored"));
         }
-    }
-    if doc.textures().next().is_some() {
-        cx.warn("textures are ignored: albedo is baseColorFactor");
     }
     if doc.skins().next().is_some() {
         cx.warn("skins are ignored");
