@@ -9,11 +9,10 @@
 //! `-N`, so the floor is what the metrics say of the image `R + D` against `R`: its error is
 //! `D`, distributed (to second order) as a perfect renderer's.
 
-use super::warp::{warped_f1, WarpedFlicker};
+use super::warp::{warped_f1, Warp, WarpedFlicker};
 use super::{sequence, SequenceMetrics};
 use crate::image::Hdr;
 use anyhow::{bail, Result};
-use glam::Vec2;
 use serde::Serialize;
 
 /// The reference's noise floor under a comparison's figures.
@@ -70,7 +69,7 @@ pub fn floor(
     reference: &[Hdr],
     halves: [&[Hdr]; 2],
     spp: [u32; 2],
-    motion: Option<&[Vec<Option<Vec2>>]>,
+    motion: Option<&[Vec<Option<Warp>>]>,
 ) -> Result<Floor> {
     if spp[0] == 0 || spp[1] == 0 {
         bail!(

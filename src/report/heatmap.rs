@@ -121,7 +121,7 @@ pub fn write_png(path: &Path, img: &image::RgbImage) -> Result<Vec<u8>> {
 mod tests {
     use super::*;
     use crate::image::Hdr;
-    use crate::metrics::warp::{flicker_maps, warped_f1};
+    use crate::metrics::warp::{flicker_maps, warped_f1, Warp};
     use glam::{Vec2, Vec3};
 
     const W: u32 = 8;
@@ -135,22 +135,26 @@ mod tests {
         }
     }
 
-    /// An error pattern that moves 2 pixels left between frames (the warp reads frame 0 two
-    /// pixels to the right), plus a known change: 0.003 everywhere, 0.013 at x = 5.
-    /// By hand: |e_1(x) - e_0(x + 2)| = 0.003 (0.013 at x = 5); x = 6, 7 came from off
-    /// screen and are left out.
+    /// An error pattern that moves 1.5 pixels left between frames (the warp reads frame 0
+    /// half way between the centres 1 and 2 pixels to the right, bilinearly), plus a known
+    /// change: 0.003 everywhere, 0.013 at x = 5. By hand, with e_0 linear in x:
+    /// |e_1(x) - (e_0(x + 1) + e_0(x + 2)) / 2| = |e_1(x) - e_0(x + 1.5)| = 0.003 (0.013 at
+    /// x = 5); x = 6, 7 came from off screen and are left out.
     #[test]
     fn flicker_map_of_a_moving_error_is_the_hand_computed_value() {
-        let e0 = |x: u32, y: u32| 0.05 * x as f32 + 0.1 * y as f32;
+        let e0 = |x: f32, y: u32| 0.05 * x + 0.1 * y as f32;
         let test = vec![
-            hdr(e0),
-            hdr(|x, y| e0(x + 2, y) + 0.003 + if x == 5 { 0.01 } else { 0.0 }),
+            hdr(|x, y| e0(x as f32, y)),
+            hdr(|x, y| e0(x as f32 + 1.5, y) + 0.003 + if x == 5 { 0.01 } else { 0.0 }),
         ];
         let reference = vec![hdr(|_, _| 0.0); 2];
-        let shift: Vec<Option<Vec2>> = (0..W * H)
+        let shift: Vec<Option<Warp>> = (0..W * H)
             .map(|i| {
                 let (x, y) = (i % W, i / W);
-                (x + 2 < W).then(|| Vec2::new(x as f32 + 2.5, y as f32 + 0.5))
+                (x + 2 < W).then(|| Warp {
+                    q: Vec2::new(x as f32 + 2.0, y as f32 + 0.5),
+                    around: [true, true, false, false],
+                })
             })
             .collect();
         let motion = vec![vec![None; (W * H) as usize], shift];

@@ -130,7 +130,7 @@ impl Plan {
 
     /// Where each frame's pixels were in the frame before (for warped flicker), from the
     /// scene's exact motion.
-    pub fn motion(&self) -> Vec<Vec<Option<glam::Vec2>>> {
+    pub fn motion(&self) -> Vec<Vec<Option<crate::metrics::warp::Warp>>> {
         let s = &self.cfg.sequence;
         let frames: Vec<crate::scene::Frame> = self
             .numbers

@@ -68,7 +68,7 @@ fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
 fn run(
     plan: &Plan,
     reference: &[Hdr],
-    motion: &[Vec<Option<glam::Vec2>>],
+    motion: &[Vec<Option<crate::metrics::warp::Warp>>],
     spec: RunSpec,
     tick: &dyn Fn(),
 ) -> Result<(RunRecord, Vec<Hdr>, FlickerMaps)> {
@@ -121,7 +121,7 @@ fn run(
 pub fn run_all(
     plan: &Plan,
     reference: &[Hdr],
-    motion: &[Vec<Option<glam::Vec2>>],
+    motion: &[Vec<Option<crate::metrics::warp::Warp>>],
     tick: &dyn Fn(),
 ) -> Result<Results> {
     let mut results = Results {
