@@ -1,5 +1,6 @@
 //! `irad compare` end to end, and its report.html in a real browser (headless Chromium).
 
+use base64::Engine;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -161,6 +162,32 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
         );
         assert!(page_text.contains(&svg), "{chart}.svg is not on the page");
     }
+    // Flicker heat maps: one sheet of every frame pair and the largest pair per shown run
+    // (the 32-VPL runs, the middle of --vpls), on one scale, written under flicker/ and linked and embedded.
+    assert!(page_text.contains("Flicker heat maps"));
+    assert!(out.join("flicker/scale.png").exists());
+    for run in ["uniform-32", "cdf-32", "mh-32"] {
+        for file in [
+            format!("flicker/{run}.png"),
+            format!("flicker/{run}-largest.png"),
+        ] {
+            let bytes = std::fs::read(out.join(&file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert!(
+                page_text.contains(&format!("href=\"{file}\"")),
+                "{file} is not linked"
+            );
+            let b64 = base64::engine::general_purpose::STANDARD.encode(&bytes);
+            assert!(page_text.contains(&b64), "{file} is not embedded");
+            let img = image::load_from_memory(&bytes).unwrap();
+            // frames 1..3 are three 32x32 tiles in a row (2-pixel gaps); the largest alone.
+            let expect = if file.ends_with("-largest.png") {
+                (32, 32)
+            } else {
+                (3 * 32 + 2 * 2, 32)
+            };
+            assert_eq!((img.width(), img.height()), expect, "{file}");
+        }
+    }
     // The constant floor is drawn at its value, written in the legend.
     let svg = std::fs::read_to_string(out.join("charts/flicker_error.svg")).unwrap();
     assert!(
@@ -279,8 +306,9 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
         check.contains("broken=0") && check.contains("charts=8"),
         "{check}"
     );
-    // 1 reference + 3 samplers x (frames + error) = 7 images.
-    assert!(check.contains("images=7"), "{check}");
+    // 1 reference + 3 samplers x (frames + error) = 7 animations, and the flicker heat
+    // maps: the colour bar + 3 samplers x (sheet + largest pair) = 7 images.
+    assert!(check.contains("images=14"), "{check}");
     let shot = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-screenshot.png");
     let s = headless(
         &browser,

@@ -400,3 +400,52 @@ fn path_errors_name_the_file() {
     let _ = Vec4::ZERO;
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `irad scenes FILE` names the animated nodes, what their channels key and what they move.
+#[test]
+fn inspection_names_the_animated_nodes() {
+    let text = |v: &Value| irad::scene::inspect::inspect(&load_json(v).unwrap()).to_string();
+    // cornell-box with its moving block renamed: keyed translation and rotation, moving no
+    // camera, light or emitter.
+    let mut v = builtin_json("cornell-box");
+    let nodes = v["nodes"].as_array_mut().unwrap();
+    let k = nodes.iter().position(|n| n["name"] == "small_box").unwrap();
+    nodes[k]["name"] = json!("crate");
+    let t = text(&v);
+    let line = format!("  animated    'crate' (node {k}): translation, rotation\n");
+    assert!(t.contains(&line), "'{line}' missing from:\n{t}");
+    assert_eq!(t.matches("  animated ").count(), 1, "{t}");
+    // Unnamed, it is "node K".
+    v["nodes"][k].as_object_mut().unwrap().remove("name");
+    let t = text(&v);
+    let line = format!("  animated    node {k}: translation, rotation\n");
+    assert!(t.contains(&line), "'{line}' missing from:\n{t}");
+    // A keyed parent moves the emitting light mesh below it, and the camera below another
+    // keyed parent is named as moved.
+    let mut v = builtin_json("cornell-light");
+    let nodes = v["nodes"].as_array_mut().unwrap();
+    let light = nodes.iter().position(|n| n["name"] == "light").unwrap();
+    let camera = nodes
+        .iter()
+        .position(|n| n.get("camera").is_some())
+        .unwrap();
+    nodes.push(json!({ "name": "rig", "children": [light] }));
+    nodes.push(json!({ "name": "dolly", "children": [camera] }));
+    let (rig, dolly) = (nodes.len() - 2, nodes.len() - 1);
+    let roots = v["scenes"][0]["nodes"].as_array_mut().unwrap();
+    roots.retain(|r| *r != json!(light) && *r != json!(camera));
+    roots.extend([json!(rig), json!(dolly)]);
+    // Both parents keyed by the light's own sampler (a sampler may serve several channels).
+    let mut g = v.clone();
+    let channels = g["animations"][0]["channels"].as_array_mut().unwrap();
+    channels.push(json!({ "sampler": 0, "target": { "node": rig, "path": "translation" } }));
+    channels.push(json!({ "sampler": 0, "target": { "node": dolly, "path": "translation" } }));
+    let t = text(&g);
+    for line in [
+        format!("  animated    'light' (node {light}): translation (moves an emitter)\n"),
+        format!("  animated    'rig' (node {rig}): translation (moves an emitter)\n"),
+        format!("  animated    'dolly' (node {dolly}): translation (moves the camera)\n"),
+    ] {
+        assert!(t.contains(&line), "'{line}' missing from:\n{t}");
+    }
+}

@@ -205,14 +205,17 @@ pub struct WarpedFlicker {
     pub frames: Vec<(f64, f64)>,
 }
 
-/// Warped F1 of `test` against `reference` given each frame's reprojection (`motion[t]` for
-/// t >= 1, from [`reproject`]; `motion[0]` is not used). The previous error is read at the
-/// reprojected position ([`Warp::read`]).
-pub fn warped_f1(
+/// Per-pixel flicker of every frame pair (frames 1..): `|e_t(p) - e_(t-1)(warp(p))|` with the
+/// previous error read at the reprojected position ([`Warp::read`]), the quantity whose mean
+/// over the kept pixels is a frame's warped F1; None where the warp left the pixel out
+/// (hidden or off screen at t-1). For a still camera and still objects the warp reads the
+/// same pixel, and this is the plain per-pixel flicker `|e_t(p) - e_(t-1)(p)|`. `motion` is
+/// as for [`warped_f1`].
+pub fn flicker_maps(
     test: &[Hdr],
     reference: &[Hdr],
     motion: &[Vec<Option<Warp>>],
-) -> Result<WarpedFlicker> {
+) -> Result<Vec<Vec<Option<f64>>>> {
     if test.len() != reference.len() || test.len() != motion.len() || test.is_empty() {
         bail!(
             "sequences differ in length: {} test frames, {} reference frames, {} motion fields",
@@ -222,9 +225,8 @@ pub fn warped_f1(
         );
     }
     let (w, h) = (test[0].width, test[0].height);
-    let mut out = WarpedFlicker::default();
+    let mut maps = Vec::new();
     let mut prev: Option<Vec<f64>> = None;
-    let (mut kept_all, mut total) = (0usize, 0usize);
     for ((t, r), m) in test.iter().zip(reference).zip(motion) {
         if (t.width, t.height) != (w, h)
             || (r.width, r.height) != (w, h)
@@ -241,25 +243,49 @@ pub fn warped_f1(
         }
         let e = error_image(t, r);
         if let Some(p) = &prev {
-            let (mut sum, mut kept) = (0.0, 0usize);
-            for (i, q) in m.iter().enumerate() {
-                if let Some(q) = q {
-                    sum += (e[i] - q.read(p, w)).abs();
-                    kept += 1;
-                }
-            }
-            out.frames
-                .push((sum / kept.max(1) as f64, kept as f64 / m.len() as f64));
-            kept_all += kept;
-            total += m.len();
+            maps.push(
+                m.iter()
+                    .enumerate()
+                    .map(|(i, q)| q.map(|q| (e[i] - q.read(p, w)).abs()))
+                    .collect(),
+            );
         }
         prev = Some(e);
+    }
+    Ok(maps)
+}
+
+/// Warped F1 of `test` against `reference` given each frame's reprojection (`motion[t]` for
+/// t >= 1, from [`reproject`]; `motion[0]` is not used): the mean of [`flicker_maps`] over
+/// the kept pixels of each frame pair.
+pub fn warped_f1(
+    test: &[Hdr],
+    reference: &[Hdr],
+    motion: &[Vec<Option<Warp>>],
+) -> Result<WarpedFlicker> {
+    Ok(summarize(&flicker_maps(test, reference, motion)?))
+}
+
+/// Warped F1 from per-pixel flicker maps (see [`flicker_maps`]).
+pub fn summarize(maps: &[Vec<Option<f64>>]) -> WarpedFlicker {
+    let mut out = WarpedFlicker::default();
+    let (mut kept_all, mut total) = (0usize, 0usize);
+    for m in maps {
+        let (mut sum, mut kept) = (0.0, 0usize);
+        for v in m.iter().flatten() {
+            sum += v;
+            kept += 1;
+        }
+        out.frames
+            .push((sum / kept.max(1) as f64, kept as f64 / m.len() as f64));
+        kept_all += kept;
+        total += m.len();
     }
     if !out.frames.is_empty() {
         out.f1 = out.frames.iter().map(|f| f.0).sum::<f64>() / out.frames.len() as f64;
         out.kept = kept_all as f64 / total.max(1) as f64;
     }
-    Ok(out)
+    out
 }
 
 /// The reprojection of every frame of `frames` (frame t from t-1) at `width` x `height`.

@@ -32,6 +32,31 @@ pub struct Clip {
     pub error_gif: Option<Vec<u8>>,
 }
 
+/// One run's flicker heat maps: every frame pair tiled on one sheet, and the frame pair with
+/// the largest warped F1 on its own; PNG bytes (embedded) and their file names (linked).
+pub struct HeatMap {
+    pub label: String,
+    pub sheet: Vec<u8>,
+    pub sheet_file: String,
+    /// The frame t of the pair (t-1, t) with the largest flicker, and its warped F1.
+    pub worst_frame: u32,
+    pub worst_f1: f64,
+    pub worst: Vec<u8>,
+    pub worst_file: String,
+}
+
+/// The heat maps of every shown run, on one colour scale.
+pub struct Heat {
+    /// The flicker value drawn with the ramp's top colour (and above it).
+    pub top: f64,
+    /// The colour bar (PNG), with the left-out grey at its right.
+    pub legend: Vec<u8>,
+    /// The frame numbers of the sheets' tiles, in reading order, and tiles to a row.
+    pub frames: Vec<u32>,
+    pub cols: u32,
+    pub maps: Vec<HeatMap>,
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
@@ -46,6 +71,51 @@ fn gif_uri(bytes: &[u8]) -> String {
     )
 }
 
+fn png_uri(bytes: &[u8]) -> String {
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bytes)
+    )
+}
+
+/// The heat maps' section.
+fn heat_section(heat: &Heat) -> String {
+    let mut h = String::from("<h2>Flicker heat maps</h2>\n");
+    let (first, last) = (
+        heat.frames.first().copied().unwrap_or(0),
+        heat.frames.last().copied().unwrap_or(0),
+    );
+    h += &format!(
+        "<p>Per pixel |e_t - warp(e_(t-1))|, e = lum(test) - lum(reference): the quantity whose mean is the \
+warped F1 (the plain difference where nothing moves). One tile per frame t = {first}..{last} in reading order, \
+{} to a row; the largest frame pair on the right. One scale for every run: \
+<img class=\"legend\" alt=\"colour scale\" src=\"{}\"> black 0 to pale yellow {:.3e} (and above); \
+grey: left out by the warp (hidden or off screen in the frame before).</p>\n<div class=\"heat\">\n",
+        heat.cols,
+        png_uri(&heat.legend),
+        heat.top
+    );
+    for m in &heat.maps {
+        h += &format!(
+            "<div class=\"heatrow\"><div>{}</div><a href=\"{}\"><img class=\"sheet\" alt=\"{} flicker, every frame\" src=\"{}\"></a>\
+<figure><a href=\"{}\"><img class=\"worst\" alt=\"{} flicker, frame {}\" src=\"{}\"></a>\
+<figcaption>frame {} (warped F1 {:.5})</figcaption></figure></div>\n",
+            esc(&m.label),
+            esc(&m.sheet_file),
+            esc(&m.label),
+            png_uri(&m.sheet),
+            esc(&m.worst_file),
+            esc(&m.label),
+            m.worst_frame,
+            png_uri(&m.worst),
+            m.worst_frame,
+            m.worst_f1
+        );
+    }
+    h += "</div>\n";
+    h
+}
+
 /// The page. `charts` are (title, SVG text); `notes` are lines of context (scene, adapter...);
 /// `floor` is the last row of the table.
 pub fn page(
@@ -55,6 +125,7 @@ pub fn page(
     floor: Option<&FloorRow>,
     charts: &[(String, String)],
     clips: &[Clip],
+    heat: Option<&Heat>,
 ) -> String {
     let mut h = String::new();
     h += "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n";
@@ -63,7 +134,9 @@ pub fn page(
 table{border-collapse:collapse;margin:12px 0}td,th{border:1px solid #bbb;padding:4px 10px;text-align:right}\
 th{background:#eee}td:first-child{text-align:left}.charts{display:flex;flex-wrap:wrap;gap:12px}\
 .charts figure{margin:0}.clips{display:flex;flex-wrap:wrap;gap:16px}.clip{text-align:center}\
-.clip img{image-rendering:pixelated;width:256px;display:block;margin:2px}#check{color:#777;font-size:12px}</style>\n";
+.clip img{image-rendering:pixelated;width:256px;display:block;margin:2px}\
+.heatrow{display:flex;gap:16px;align-items:flex-start;margin:8px 0}.heatrow>div{width:140px}\
+.heat img{image-rendering:pixelated}.heat img.sheet{width:720px}.heat img.worst{width:256px}.legend{vertical-align:middle}#check{color:#777;font-size:12px}</style>\n";
     h += "</head><body>\n";
     h += &format!("<h1>{}</h1>\n<ul>\n", esc(title));
     for n in notes {
@@ -123,7 +196,11 @@ A figure near it says more about the reference than about the run (see docs/math
         }
         h += "</div>\n";
     }
-    h += "</div>\n<p id=\"check\">checking images...</p>\n";
+    h += "</div>\n";
+    if let Some(heat) = heat {
+        h += &heat_section(heat);
+    }
+    h += "<p id=\"check\">checking images...</p>\n";
     h += "<script>window.addEventListener('load',()=>{const imgs=[...document.images];\
 const bad=imgs.filter(i=>!(i.complete&&i.naturalWidth>0));\
 const charts=document.querySelectorAll('figure.chart svg').length;\

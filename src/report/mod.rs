@@ -1,6 +1,7 @@
 //! Stage 8: output. Frame files, progress bars, and the run record (`run.json`).
 
 pub mod charts;
+pub mod heatmap;
 pub mod html;
 
 use anyhow::{Context, Result};

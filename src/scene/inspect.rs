@@ -38,6 +38,22 @@ pub struct CameraInfo {
     pub in_use: bool,
 }
 
+/// One animated node: what its channels key, and what it moves (itself and its subtree).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnimatedNode {
+    pub node: usize,
+    /// The node's name, or "node N" when it has none.
+    pub name: String,
+    /// The keyed properties, in the order translation, rotation, scale (morph-target weights
+    /// are not loaded: the loader warns about them).
+    pub properties: Vec<&'static str>,
+    /// Whether the node or one of its descendants carries the camera in use, a punctual
+    /// light, an emitting mesh.
+    pub moves_camera: bool,
+    pub moves_light: bool,
+    pub moves_emitter: bool,
+}
+
 /// A summary of a loaded scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Inspection {
@@ -52,6 +68,8 @@ pub struct Inspection {
     /// Animation channels and the length of the animation (seconds).
     pub channels: usize,
     pub duration: f32,
+    /// The animated nodes, in node order.
+    pub animated: Vec<AnimatedNode>,
     /// Axis-aligned bounds at t = 0.
     pub bounds: (Vec3, Vec3),
     pub warnings: Vec<String>,
@@ -99,6 +117,7 @@ pub fn inspect(scene: &Scene) -> Inspection {
             })
         })
         .collect();
+    let animated = animated_nodes(scene);
     Inspection {
         name: scene.name.clone(),
         triangles: f.tris.len(),
@@ -108,9 +127,69 @@ pub fn inspect(scene: &Scene) -> Inspection {
         camera: f.camera,
         channels: scene.channels.len(),
         duration: scene.duration(),
+        animated,
         bounds: f.bounds(),
         warnings: scene.warnings.clone(),
     }
+}
+
+/// Every node that a channel keys, with what it moves.
+fn animated_nodes(scene: &Scene) -> Vec<AnimatedNode> {
+    use super::anim::Property;
+    let mut nodes: Vec<usize> = scene.channels.iter().map(|c| c.node).collect();
+    nodes.sort_unstable();
+    nodes.dedup();
+    let emits = |mesh: usize| {
+        scene.meshes[mesh]
+            .iter()
+            .any(|p| scene.materials[p.material].emission.max_element() > 0.0)
+    };
+    nodes
+        .into_iter()
+        .filter(|&n| n < scene.nodes.len())
+        .map(|n| {
+            let properties = [
+                (Property::Translation, "translation"),
+                (Property::Rotation, "rotation"),
+                (Property::Scale, "scale"),
+            ]
+            .into_iter()
+            .filter(|(p, _)| {
+                scene
+                    .channels
+                    .iter()
+                    .any(|c| c.node == n && c.property == *p)
+            })
+            .map(|(_, name)| name)
+            .collect();
+            // The subtree (the loader refuses cycles; `seen` keeps a shared child once).
+            let (mut stack, mut seen) = (vec![n], vec![false; scene.nodes.len()]);
+            let (mut camera, mut light, mut emitter) = (false, false, false);
+            while let Some(i) = stack.pop() {
+                if std::mem::replace(&mut seen[i], true) {
+                    continue;
+                }
+                let node = &scene.nodes[i];
+                camera |= scene.camera_node == Some(i);
+                light |= node.light.is_some();
+                emitter |= node.mesh.is_some_and(emits);
+                stack.extend(node.children.iter().copied().filter(|&c| c < seen.len()));
+            }
+            let name = &scene.nodes[n].name;
+            AnimatedNode {
+                node: n,
+                name: if name.is_empty() {
+                    format!("node {n}")
+                } else {
+                    name.clone()
+                },
+                properties,
+                moves_camera: camera,
+                moves_light: light,
+                moves_emitter: emitter,
+            }
+        })
+        .collect()
 }
 
 impl fmt::Display for Inspection {
@@ -182,6 +261,31 @@ impl fmt::Display for Inspection {
             )?;
         } else {
             writeln!(w, "  animation   none (still)")?;
+        }
+        for a in &self.animated {
+            let moves: Vec<&str> = [
+                (a.moves_camera, "the camera"),
+                (a.moves_light, "a light"),
+                (a.moves_emitter, "an emitter"),
+            ]
+            .into_iter()
+            .filter_map(|(m, what)| m.then_some(what))
+            .collect();
+            let moves = if moves.is_empty() {
+                String::new()
+            } else {
+                format!(" (moves {})", moves.join(", "))
+            };
+            let name = if a.name == format!("node {}", a.node) {
+                a.name.clone()
+            } else {
+                format!("'{}' (node {})", a.name, a.node)
+            };
+            writeln!(
+                w,
+                "  animated    {name}: {}{moves}",
+                a.properties.join(", ")
+            )?;
         }
         for warning in &self.warnings {
             writeln!(w, "  warning     {warning}")?;

@@ -1,5 +1,6 @@
 //! `irad compare`: samplers x VPL counts (and swept sampler knobs) on one animation, against a
-//! cached reference: metrics.csv/json, charts (SVG and PNG) and a self-contained report.html.
+//! cached reference: metrics.csv/json, charts (SVG and PNG), per-frame flicker heat maps
+//! (flicker/) and a self-contained report.html.
 //! In four steps: [`plan`] (scene, frames, every run's settings checked on the one device),
 //! [`reference_cache`] (the path-traced frames, two independent halves reused when their
 //! settings match, whose difference gives the reference's own noise floor), [`runs`] (each

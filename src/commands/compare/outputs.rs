@@ -66,6 +66,74 @@ fn clips(plan: &Plan, reference: &[Hdr], results: &Results) -> Result<Vec<html::
     Ok(clips)
 }
 
+/// The flicker heat maps of the shown runs, on one scale, written under flicker/ (a sheet of
+/// every frame pair and the largest one per run, and the colour bar) for the page.
+fn heat_maps(plan: &Plan, results: &Results) -> Result<Option<html::Heat>> {
+    use crate::report::heatmap;
+    let (w, h) = (plan.cfg.sequence.size.width, plan.cfg.sequence.size.height);
+    if results.flicker.iter().all(|(_, maps)| maps.is_empty()) {
+        return Ok(None);
+    }
+    let dir = plan.cfg.out.join("flicker");
+    crate::report::prepare_out_dir(&dir)?;
+    let top = heatmap::shared_scale(
+        results
+            .flicker
+            .iter()
+            .flat_map(|(_, maps)| maps.iter().map(|m| m.as_slice())),
+    );
+    let cols = 8;
+    let mut maps = Vec::new();
+    for (label, frames) in &results.flicker {
+        let name = label.replace(' ', "-");
+        let f1: Vec<f64> = frames
+            .iter()
+            .map(|m| {
+                let (s, n) = m
+                    .iter()
+                    .flatten()
+                    .fold((0.0, 0usize), |(s, n), &v| (s + v as f64, n + 1));
+                s / n.max(1) as f64
+            })
+            .collect();
+        let worst = (0..f1.len())
+            .max_by(|&a, &b| f1[a].total_cmp(&f1[b]))
+            .unwrap_or(0);
+        let (sheet_file, worst_file) = (
+            format!("flicker/{name}.png"),
+            format!("flicker/{name}-largest.png"),
+        );
+        let sheet = heatmap::write_png(
+            &plan.cfg.out.join(&sheet_file),
+            &heatmap::sheet(frames, w, h, top, cols),
+        )?;
+        let worst_png = match frames.get(worst) {
+            Some(m) => heatmap::write_png(
+                &plan.cfg.out.join(&worst_file),
+                &heatmap::image(m, w, h, top),
+            )?,
+            None => continue,
+        };
+        maps.push(html::HeatMap {
+            label: label.clone(),
+            sheet,
+            sheet_file,
+            worst_frame: plan.numbers[worst + 1],
+            worst_f1: f1[worst],
+            worst: worst_png,
+            worst_file,
+        });
+    }
+    let legend = heatmap::write_png(&dir.join("scale.png"), &heatmap::legend())?;
+    Ok(Some(html::Heat {
+        top: top as f64,
+        legend,
+        frames: plan.numbers[1..].to_vec(),
+        cols: cols.min(plan.numbers.len().saturating_sub(1) as u32).max(1),
+        maps,
+    }))
+}
+
 /// metrics.csv: one row per run and frame.
 fn write_csv(plan: &Plan, results: &Results) -> Result<()> {
     let spec = plan.spec.as_str();
@@ -476,7 +544,7 @@ fn print_table(
         "-"
     )?;
     crate::outln!(
-        "wrote {}/report.html, metrics.csv, metrics.json, charts/",
+        "wrote {}/report.html, metrics.csv, metrics.json, charts/, flicker/",
         cfg.out.display()
     )
 }
@@ -505,6 +573,7 @@ pub fn write(plan: &Plan, reference: &[Hdr], floor: &Floor, results: &Results) -
     let svgs = write_charts(plan, floor, results)?;
     let rows = rows(results);
     let floor_row = floor_row(floor);
+    let heat = heat_maps(plan, results)?;
     let page = html::page(
         &format!("irad compare: {spec}"),
         &notes,
@@ -512,6 +581,7 @@ pub fn write(plan: &Plan, reference: &[Hdr], floor: &Floor, results: &Results) -
         Some(&floor_row),
         &svgs,
         &clips,
+        heat.as_ref(),
     );
     write_bytes(&cfg.out.join("report.html"), page.as_bytes())?;
 

@@ -5,12 +5,15 @@ use super::plan::{label, Plan, RunSpec};
 use crate::config::{self, Knob};
 use crate::frame::Pipeline;
 use crate::image::Hdr;
-use crate::metrics::warp::{warped_f1, WarpedFlicker};
+use crate::metrics::warp::{flicker_maps, summarize, WarpedFlicker};
 use crate::metrics::{self, SequenceMetrics};
 use crate::radiosity::Method;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
 use serde::Serialize;
+
+/// Per-pixel warped flicker of each frame pair, None where the warp left the pixel out.
+pub type FlickerMaps = Vec<Vec<Option<f32>>>;
 
 /// One run's measurements.
 #[derive(Serialize)]
@@ -50,6 +53,9 @@ pub struct Results {
     pub records: Vec<RunRecord>,
     /// (label, HDR frames) of the runs at the shown VPL count.
     pub shown: Vec<(String, Vec<Hdr>)>,
+    /// (label, per-pixel warped flicker of each frame pair, None where the warp left the
+    /// pixel out) of the same runs, for the report's heat maps.
+    pub flicker: Vec<(String, FlickerMaps)>,
     pub adapter: String,
 }
 
@@ -65,7 +71,7 @@ fn run(
     motion: &[Vec<Option<crate::metrics::warp::Warp>>],
     spec: RunSpec,
     tick: &dyn Fn(),
-) -> Result<(RunRecord, Vec<Hdr>)> {
+) -> Result<(RunRecord, Vec<Hdr>, FlickerMaps)> {
     let cfg = config::Render {
         method: spec.method,
         ..plan.cfg.run_with(spec.sampler, spec.vpls, spec.knob)
@@ -82,7 +88,12 @@ fn run(
         tick();
     }
     let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
-    let warped = warped_f1(&imgs, reference, motion)?;
+    let maps = flicker_maps(&imgs, reference, motion)?;
+    let warped = summarize(&maps);
+    let maps = maps
+        .into_iter()
+        .map(|m| m.into_iter().map(|v| v.map(|v| v as f32)).collect())
+        .collect();
     let record = RunRecord {
         method: spec.method,
         sampler: spec.sampler,
@@ -103,7 +114,7 @@ fn run(
         replaced,
         acceptance,
     };
-    Ok((record, imgs))
+    Ok((record, imgs, maps))
 }
 
 /// Every run of the plan, in order.
@@ -116,12 +127,14 @@ pub fn run_all(
     let mut results = Results {
         records: Vec::new(),
         shown: Vec::new(),
+        flicker: Vec::new(),
         adapter: plan.gpu.adapter.to_string(),
     };
     for spec in plan.runs() {
-        let (record, imgs) = run(plan, reference, motion, spec, tick)?;
+        let (record, imgs, maps) = run(plan, reference, motion, spec, tick)?;
         if spec.shown {
             results.shown.push((record.label(), imgs));
+            results.flicker.push((record.label(), maps));
         }
         results.records.push(record);
     }

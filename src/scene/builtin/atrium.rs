@@ -1,9 +1,10 @@
 //! The atrium: a Sponza-class built-in (issue 11 item 7). A 30 x 14 m court open to the sky,
 //! two storeys of arcades (44 columns, 40 arches) along its long sides under gallery slabs,
 //! lit by a sun: a large emitting quad high above the open roof that slides across the sky
-//! over 4 s (glTF has no sun without KHR_lights_punctual). Columns and arches are one mesh
-//! each, instanced by their nodes, so the file stays small while the scene has about 130k
-//! triangles.
+//! over 4 s (an area light, so that its shadows are soft), and a spot light on a column of
+//! the north arcade aimed at the court's floor, whose beam sweeps 20 degrees and back over
+//! the same 4 s (KHR_lights_punctual). Columns and arches are one mesh each, instanced by
+//! their nodes, so the file stays small while the scene has about 130k triangles.
 
 use super::GltfBuilder;
 use glam::{Quat, Vec3};
@@ -22,6 +23,17 @@ const COLUMNS: usize = 11;
 const STOREYS: [(f32, f32); 2] = [(0.0, 4.5), (6.0, 10.0)];
 /// The colonnades stand at z = +-ROW.
 const ROW: f32 = 4.5;
+
+/// The spot light: where it hangs (in front of the north arcade's column at x = -5, under
+/// its capital), the floor point its axis meets at t = 0, its cone (inner and outer half
+/// angles, degrees) and intensity (W/sr, white; written as candela, 683 per W/sr).
+pub const SPOT_AT: Vec3 = Vec3::new(-5.0, 4.2, -4.0);
+pub const SPOT_TARGET: Vec3 = Vec3::new(-3.0, 0.0, -1.0);
+pub const SPOT_CONE_DEG: [f32; 2] = [15.0, 25.0];
+pub const SPOT_INTENSITY: f32 = 240.0;
+/// The beam's sweep: a turn about the vertical through the light, 0 -> 20 -> 0 degrees at
+/// t = 0, 2, 4 s.
+pub const SPOT_SWEEP_DEG: f32 = 20.0;
 
 /// Pushes quad (a, b, c, d) as two triangles facing `out` (the winding is chosen to match).
 fn quad_facing(idx: &mut Vec<u32>, p: &[Vec3], q: [u32; 4], out: Vec3) {
@@ -161,6 +173,15 @@ pub(super) fn atrium(b: &mut GltfBuilder) {
     let sun_node =
         b.node(json!({ "name": "sun", "mesh": sun_mesh, "translation": [-6.0, 30.0, 0.0] }));
     roots.push(sun_node);
+    let aim = Quat::from_rotation_arc(Vec3::NEG_Z, (SPOT_TARGET - SPOT_AT).normalize());
+    let spot = b.spot_node(
+        "spot",
+        SPOT_AT,
+        aim,
+        SPOT_INTENSITY * crate::scene::lights::LUMENS_PER_WATT,
+        SPOT_CONE_DEG,
+    );
+    roots.push(spot);
     let look = Quat::from_rotation_y(-PI / 2.0) * Quat::from_rotation_x(8f32.to_radians());
     roots.push(b.camera_node([-13.5, 2.0, 0.0], look, 60.0));
     b.roots = roots;
@@ -168,4 +189,9 @@ pub(super) fn atrium(b: &mut GltfBuilder) {
     let x = [-6.0, 6.0, -6.0];
     let values: Vec<f32> = x.iter().flat_map(|&x| [x, 30.0, 0.0]).collect();
     b.animate("sun", sun_node, "translation", "LINEAR", &times, &values);
+    let values: Vec<f32> = [0.0, SPOT_SWEEP_DEG, 0.0]
+        .iter()
+        .flat_map(|&a: &f32| (Quat::from_rotation_y(a.to_radians()) * aim).to_array())
+        .collect();
+    b.animate("spot", spot, "rotation", "LINEAR", &times, &values);
 }

@@ -2,7 +2,7 @@
 //! by the generator in this file (`irad scenes --generate scenes/` writes them again; a test
 //! checks that the committed files are exactly what the generator makes).
 
-mod atrium;
+pub mod atrium;
 
 use super::{load, Scene};
 use base64::Engine;
@@ -49,7 +49,7 @@ pub const BUILTINS: &[Builtin] = &[
     },
     Builtin {
         name: "atrium",
-        stresses: "Sponza-class: a 30 x 14 m court with two storeys of arcades (about 130k triangles), lit by a sun high above the open roof that slides across the sky over 4 s: scale, deep occlusion, light mostly arriving by bounces",
+        stresses: "Sponza-class: a 30 x 14 m court with two storeys of arcades (about 130k triangles), lit by a sun high above the open roof that slides across the sky over 4 s and a spot light on a column whose beam sweeps the floor: scale, deep occlusion, light mostly arriving by bounces",
         gltf: include_str!("../../../scenes/atrium.gltf"),
     },
 ];
@@ -321,6 +321,8 @@ struct GltfBuilder {
     cameras: Vec<Value>,
     channels: Vec<(String, Value, Value)>,
     roots: Vec<usize>,
+    /// KHR_lights_punctual lights.
+    lights: Vec<Value>,
 }
 
 impl GltfBuilder {
@@ -427,6 +429,26 @@ impl GltfBuilder {
         self.node(json!({ "name": "camera", "camera": self.cameras.len() - 1, "translation": at, "rotation": rotation.to_array() }))
     }
 
+    /// A node carrying a KHR_lights_punctual spot light of `candela` (white) with cone half
+    /// angles `inner` and `outer` (degrees), at `at`, shining along its rotated -Z.
+    fn spot_node(
+        &mut self,
+        name: &str,
+        at: Vec3,
+        rotation: Quat,
+        candela: f32,
+        cone_deg: [f32; 2],
+    ) -> usize {
+        self.lights.push(json!({
+            "name": name, "type": "spot", "color": [1.0, 1.0, 1.0], "intensity": candela,
+            "spot": { "innerConeAngle": cone_deg[0].to_radians(), "outerConeAngle": cone_deg[1].to_radians() },
+        }));
+        self.node(json!({
+            "name": name, "translation": at.to_array(), "rotation": rotation.to_array(),
+            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
+        }))
+    }
+
     fn animate(
         &mut self,
         anim: &str,
@@ -477,8 +499,16 @@ impl GltfBuilder {
                 "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&self.bin)),
             }],
         });
+        let mut used = Vec::new();
         if uses_strength {
-            root["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]);
+            used.push("KHR_materials_emissive_strength");
+        }
+        if !self.lights.is_empty() {
+            used.push("KHR_lights_punctual");
+            root["extensions"] = json!({ "KHR_lights_punctual": { "lights": self.lights } });
+        }
+        if !used.is_empty() {
+            root["extensionsUsed"] = json!(used);
         }
         if !animations.is_empty() {
             root["animations"] = Value::Array(
