@@ -500,13 +500,16 @@ fn double_sided_emitters_emit_from_both_sides() {
 #[test]
 fn ignored_vertex_data_warns_once_saying_what_it_changes() {
     let (mut g, mut doc) = lit();
+    // COLOR_0 is used (tests/textures.rs); a second colour set is not.
     let c = g.floats(&[1.0; 16], "VEC4", 4);
-    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
-    doc["meshes"][1]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
+    for m in [0, 1] {
+        doc["meshes"][m]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
+        doc["meshes"][m]["primitives"][0]["attributes"]["COLOR_1"] = json!(c);
+    }
     let s = load(&g.finish(doc)).unwrap();
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
     assert!(
-        s.warnings[0].contains("vertex colours") && s.warnings[0].contains("baseColorFactor"),
+        s.warnings[0].contains("vertex colours beyond COLOR_0"),
         "{:?}",
         s.warnings
     );
@@ -607,7 +610,7 @@ fn inspection_reports_what_the_file_holds() {
     doc["materials"][1]["name"] = json!("lamp");
     doc["materials"][1]["emissiveFactor"] = json!([1.0, 0.5, 0.25]);
     let c = g.floats(&[1.0; 16], "VEC4", 4);
-    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
+    doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_1"] = json!(c);
     let s = load(&g.finish(doc)).unwrap();
     let i = irad::scene::inspect::inspect(&s);
     assert_eq!(i.triangles, 4);

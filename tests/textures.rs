@@ -626,12 +626,26 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         ]),
         2,
     );
+    // A white ceiling facing down and a checkered left wall facing +x close the room on
+    // three more sides, so light bounces.
+    let ceiling = g.quad(
+        [[-1., 2., -1.], [1., 2., -1.], [1., 2., 1.], [-1., 2., 1.]],
+        FLOOR_UV,
+        None,
+        2,
+    );
+    let left = g.quad(
+        [[-1., 0., -1.], [-1., 2., -1.], [-1., 2., 1.], [-1., 0., 1.]],
+        FLOOR_UV,
+        None,
+        0,
+    );
     let checker = g.image(&png(2, 2, &CHECKER));
     let stripes = g.image(&png(2, 1, &[[255, 255, 255, 255], [40, 40, 40, 255]]));
     let doc = json!({
-        "scene": 0, "scenes": [{ "nodes": [0, 1, 2] }],
-        "nodes": [{ "mesh": 0 }, { "mesh": 1, "translation": [0.0, 1.2, 0.0], "rotation": [1.0, 0.0, 0.0, 0.0], "scale": [0.3, 1.0, 0.3] }, { "mesh": 2 }],
-        "meshes": [floor, g.quad(FLOOR, FLOOR_UV, None, 1), wall],
+        "scene": 0, "scenes": [{ "nodes": [0, 1, 2, 3, 4] }],
+        "nodes": [{ "mesh": 0 }, { "mesh": 1, "translation": [0.0, 1.2, 0.0], "rotation": [1.0, 0.0, 0.0, 0.0], "scale": [0.3, 1.0, 0.3] }, { "mesh": 2 }, { "mesh": 3 }, { "mesh": 4 }],
+        "meshes": [floor, g.quad(FLOOR, FLOOR_UV, None, 1), wall, ceiling, left],
         "materials": [
             { "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 0.0,
               "baseColorTexture": { "index": 0, "extensions": { "KHR_texture_transform": { "scale": [2.0, 2.0] } } } } },
@@ -655,6 +669,9 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         height: h,
     };
     cfg.vpls = 1024;
+    // Enough emitter samples that where they fall on the two-stripe emitter hardly matters
+    // (with the default 32 the frame came out +2.2%, with 256 -0.02%).
+    cfg.quality.light_samples = 256;
     cfg.backend = backend;
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
     let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
@@ -681,7 +698,9 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         "gpu vs reference: relMSE {:.5}, relative bias {:+.5}; indirect {:.3} of the frame",
         e.rel_mse, e.rel_bias, share
     );
-    let (rel_mse_bound, bias_bound) = (0.05, 0.05);
+    // Measured on lavapipe: relMSE 0.00211, relative bias -0.00024 (20% of the frame is
+    // indirect light).
+    let (rel_mse_bound, bias_bound) = (0.0032, 0.005);
     if e.rel_mse > rel_mse_bound || e.rel_bias.abs() > bias_bound {
         let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
         std::fs::create_dir_all(&dir).unwrap();
@@ -715,4 +734,41 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         "relative bias {}",
         e.rel_bias
     );
+}
+
+/// An image with neither a uri nor a bufferView (the gltf crate's `Image::source` panics on
+/// it, as fuzzed files found) is a warning naming it; an embedded image without a mimeType
+/// decodes by its content.
+#[test]
+fn images_without_a_source_or_a_mime_type_do_not_panic() {
+    let mut g = Gltf::default();
+    let floor = g.quad(FLOOR, FLOOR_UV, None, 0);
+    let mut img = g.image(&png(2, 2, &CHECKER));
+    img.as_object_mut().unwrap().remove("mimeType");
+    let doc = json!({
+        "scene": 0, "scenes": [{ "nodes": [0, 1] }],
+        "nodes": [{ "mesh": 0 }, { "mesh": 1, "translation": [0.0, 3.0, 0.0], "rotation": [1.0, 0.0, 0.0, 0.0] }],
+        "meshes": [floor, g.quad(FLOOR, FLOOR_UV, None, 1)],
+        "materials": [
+            { "pbrMetallicRoughness": { "baseColorFactor": [1.0, 1.0, 1.0, 1.0], "baseColorTexture": { "index": 0 }, "metallicFactor": 0.0 } },
+            { "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": { "index": 1 } },
+        ],
+        "textures": [{ "source": 0, "sampler": 0 }, { "source": 1 }],
+        "images": [img, { "name": "ghost" }],
+        "samplers": [{ "magFilter": 9728 }],
+    });
+    let s = load(&g.finish(doc));
+    println!("{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("'ghost'") && w.contains("neither a uri nor a bufferView")),
+        "{:?}",
+        s.warnings
+    );
+    let f = s.at(0.0);
+    let (tri, b1, b2) = at(&f, -0.5, -0.5);
+    assert!((f.albedo_at(tri, b1, b2).x - lin(200)).abs() < 1e-6);
+    // The emitter falls back to its factor.
+    assert!((f.emitters.total_power.x - 4.0 * std::f32::consts::PI).abs() < 1e-4);
 }

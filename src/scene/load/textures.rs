@@ -20,7 +20,7 @@ pub(super) fn read(
     // Each image decoded once, however many textures share it.
     let images: Vec<Option<image::RgbaImage>> = doc
         .images()
-        .map(|img| decode(cx, &img, buffers, base))
+        .map(|img| decode(cx, doc, &img, buffers, base))
         .collect();
     doc.textures()
         .map(|t| {
@@ -54,6 +54,7 @@ pub(super) fn read(
 /// naming it) when it cannot be had.
 fn decode(
     cx: &mut Ctx,
+    doc: &gltf::Document,
     img: &gltf::Image,
     buffers: &Buffers,
     base: Option<&Path>,
@@ -68,15 +69,23 @@ fn decode(
         ));
         None
     };
-    let bytes: Vec<u8> = match img.source() {
-        gltf::image::Source::View { view, .. } => {
+    // The image's JSON as it is: the gltf crate's Image::source unwraps a missing uri, or a
+    // bufferView's missing mimeType (fuzzed files panicked there).
+    let Some(raw) = doc.as_json().images.get(img.index()) else {
+        return fail(cx, "is missing".into());
+    };
+    let bytes: Vec<u8> = match (&raw.buffer_view, &raw.uri) {
+        (Some(v), _) => {
+            let Some(view) = doc.views().nth(v.value()) else {
+                return fail(cx, "names a bufferView that does not exist".into());
+            };
             let data = &buffers.get(view.buffer().index())?.0;
             match data.get(view.offset()..view.offset().saturating_add(view.length())) {
                 Some(b) => b.to_vec(),
                 None => return fail(cx, "lies outside its buffer".into()),
             }
         }
-        gltf::image::Source::Uri { uri, .. } => {
+        (None, Some(uri)) => {
             if let Some(rest) = uri.strip_prefix("data:") {
                 let Some((_, b64)) = rest.split_once(";base64,") else {
                     return fail(cx, "has a data: URI that is not base64".into());
@@ -106,6 +115,7 @@ fn decode(
                 }
             }
         }
+        (None, None) => return fail(cx, "has neither a uri nor a bufferView".into()),
     };
     let decoded = image::ImageReader::new(std::io::Cursor::new(&bytes))
         .with_guessed_format()
