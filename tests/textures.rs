@@ -772,3 +772,38 @@ fn images_without_a_source_or_a_mime_type_do_not_panic() {
     // The emitter falls back to its factor.
     assert!((f.emitters.total_power.x - 4.0 * std::f32::consts::PI).abs() < 1e-4);
 }
+
+/// An emitter with an alpha MASK emits nothing where it is cut away: its power counts only
+/// the solid half, and its emitter samples carry light only there.
+#[test]
+fn a_cut_out_emitter_emits_only_where_it_is_solid() {
+    let mut g = Gltf::default();
+    let floor = g.quad(FLOOR, FLOOR_UV, None, 0);
+    let img = g.image(&png(2, 1, &[[255, 255, 255, 0], [255, 255, 255, 255]]));
+    let doc = json!({
+        "scene": 0, "scenes": [{ "nodes": [0, 1] }],
+        "nodes": [{ "mesh": 0 }, { "mesh": 1, "translation": [0.0, 3.0, 0.0], "rotation": [1.0, 0.0, 0.0, 0.0] }],
+        "meshes": [floor, g.quad(FLOOR, FLOOR_UV, None, 1)],
+        "materials": [
+            { "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0 } },
+            { "emissiveFactor": [1.0, 1.0, 1.0], "alphaMode": "MASK",
+              "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "baseColorTexture": { "index": 0 } } },
+        ],
+        "textures": [{ "source": 0, "sampler": 0 }],
+        "images": [img],
+        "samplers": [{ "magFilter": 9728 }],
+    });
+    let f = load(&g.finish(doc)).at(0.0);
+    // Area 4, radiance 1: pi * 4 whole, half of it solid (up to the 32 x 32 lattice, as for
+    // the half-black emissive texture).
+    let ratio = f.emitters.total_power.x / (4.0 * std::f32::consts::PI);
+    println!("cut-out emitter power / whole: {ratio}");
+    assert!((ratio - 0.5).abs() < 0.012, "{ratio}");
+    // Emitter samples on the cut half (x < 0) carry nothing, on the solid half light.
+    let samples = f.emitter_samples(5, 64);
+    let (cut, solid): (Vec<&irad::scene::EmitterSample>, Vec<_>) =
+        samples.iter().partition(|s| s.position.x < 0.0);
+    assert!(cut.iter().all(|s| s.radiance == Vec3::ZERO));
+    assert!(solid.iter().all(|s| s.radiance.x > 0.0));
+    assert!(!cut.is_empty() && !solid.is_empty());
+}

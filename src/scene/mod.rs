@@ -302,9 +302,13 @@ impl Frame {
         self.base_color_at(tri, b1, b2).truncate()
     }
 
-    /// Emitted radiance at barycentrics (b1, b2): factor x emissive texture.
+    /// Emitted radiance at barycentrics (b1, b2): factor x emissive texture (nothing where an
+    /// alpha MASK cuts the surface away).
     pub fn emission_at(&self, tri: usize, b1: f32, b2: f32) -> Vec3 {
         let m = &self.materials[self.tri_material[tri] as usize];
+        if m.alpha_cutoff.is_some() && m.emission.max_element() > 0.0 && self.cut_at(tri, b1, b2) {
+            return Vec3::ZERO;
+        }
         match &m.emissive_texture {
             Some(r) if m.emission.max_element() > 0.0 => {
                 m.emission * self.texture_at(r, tri, b1, b2).truncate()
@@ -323,11 +327,13 @@ impl Frame {
     }
 
     /// The mean emitted radiance over triangle `tri`: the factor, or with an emissive texture
-    /// its mean over a 32 x 32 stratified lattice of points of the triangle (so that emitters
-    /// are chosen by their power; the points sampled on them carry their own radiance).
+    /// or an alpha MASK its mean over a 32 x 32 stratified lattice of points of the triangle
+    /// (so that emitters are chosen by their power; the points sampled on them carry their own
+    /// radiance).
     pub fn mean_emission(&self, tri: usize) -> Vec3 {
         let m = &self.materials[self.tri_material[tri] as usize];
-        if m.emissive_texture.is_none() || self.attrs.is_none() || m.emission.max_element() <= 0.0 {
+        let varies = m.emissive_texture.is_some() || m.alpha_cutoff.is_some();
+        if !varies || self.attrs.is_none() || m.emission.max_element() <= 0.0 {
             return m.emission;
         }
         const N: u32 = 32;
