@@ -74,6 +74,7 @@ fn bench(c: &mut Criterion) {
         camera_points: 256,
         eps: 0.05,
         mh_rate: 1.0,
+        mh_follow: 0.0,
         mh_escape: 0,
         dmin: 0.07,
         seed: 1,

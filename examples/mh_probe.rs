@@ -35,6 +35,7 @@ fn params(
         camera_points: 256,
         eps: 0.05,
         mh_rate: rate,
+        mh_follow: 0.0,
         mh_escape: 8,
         dmin,
         seed,

@@ -365,11 +365,16 @@ pub struct SamplerConfig {
     /// Defensive floor of the importance, as a fraction of its mean
     #[arg(long, default_value_t = SamplerConfig::default().eps, allow_hyphen_values = true)]
     pub eps: f32,
-    /// MH: probability that a chain proposes in a frame (1: one step every frame; lower keeps
-    /// VPLs longer, at the cost of following a moving view more slowly; the default, 0.1, is
-    /// from a sweep of flicker against error on five animations, examples/mh_probe.rs)
+    /// MH: probability that a chain proposes in a frame where nothing moves (1: one step every
+    /// frame; lower keeps VPLs longer). The rate rises with how far the target moved, see
+    /// --mh-follow
     #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
     pub mh_rate: f32,
+    /// MH: how fast the proposal rate follows the scene: rate = min(1, mh-rate + mh-follow *
+    /// d), d the total-variation distance between the last frame's and this frame's target
+    /// (0: a fixed rate)
+    #[arg(long, default_value_t = SamplerConfig::default().mh_follow, allow_hyphen_values = true)]
+    pub mh_follow: f32,
     /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
     #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
     pub mh_escape: u32,
@@ -382,7 +387,11 @@ impl Default for SamplerConfig {
             candidates: None,
             camera_points: 256,
             eps: 0.05,
-            mh_rate: 1.0,
+            // From the flicker-against-error sweep (README, "MH that holds still"): a twentieth
+            // of the chains propose where nothing moves, and the rate rises with the target's
+            // change so that chains follow a moving view or light.
+            mh_rate: 0.05,
+            mh_follow: 10.0,
             mh_escape: 8,
         }
     }
@@ -403,6 +412,7 @@ impl SamplerConfig {
         check::int("--camera-points", self.camera_points, 1, 1 << 20)?;
         check::float("--eps", self.eps, 0.0, false, 1000.0)?;
         check::float("--mh-rate", self.mh_rate, 0.0, true, 1.0)?;
+        check::float("--mh-follow", self.mh_follow, 0.0, false, 1000.0)?;
         check::int("--mh-escape", self.mh_escape, 0, 1000)
     }
     /// M for `vpls` slots.
@@ -440,6 +450,11 @@ pub struct Quality {
     /// reference's pixel filter); the passes run at S times the size (1: pixel centres only)
     #[arg(long, default_value_t = Quality::default().aa, allow_hyphen_values = true)]
     pub aa: u32,
+    /// Emitter edges: in pixels where an emitter's edge crosses the sub-samples, its emission
+    /// is box-filtered from N x N camera rays cast on the CPU (0: off, the sub-samples only;
+    /// the rest of such a pixel's light stays as the sub-samples give it)
+    #[arg(long, default_value_t = Quality::default().edge_rays, allow_hyphen_values = true)]
+    pub edge_rays: u32,
 }
 
 impl Default for Quality {
@@ -456,6 +471,12 @@ impl Default for Quality {
             // the mean luminance goes from +6.9% of the reference's to +0.9% for +20% of the
             // frame's time; 3x3 and 4x4 cost 2.2x and 3.1x.
             aa: 2,
+            // Off: the correction replaces only the emission of an edge pixel and leaves the
+            // rest of its light as the sub-samples give it, so a dark emitter in front of a
+            // bright surface comes out too dark (tests/textures.rs's room: -1.2% with 16, from
+            // -0.02%). `--edge-rays 16` on `cornell-orbit` at 96x96 takes the warped flicker of
+            // the pixels next to the light from 0.00165 to 0.00062 for 6.5 ms a frame (README).
+            edge_rays: 0,
         }
     }
 }
@@ -489,7 +510,8 @@ impl Quality {
         check::int("--light-samples", self.light_samples, 1, 4096)?;
         check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
         check::int("--interleave", self.interleave, 1, 8)?;
-        check::int("--aa", self.aa, 1, 8)
+        check::int("--aa", self.aa, 1, 8)?;
+        check::int("--edge-rays", self.edge_rays, 0, 32)
     }
 }
 
@@ -621,6 +643,7 @@ impl Render {
             shadow_size: q.shadow_size,
             interleave: q.interleave,
             aa: q.aa,
+            edge_rays: q.edge_rays,
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,
@@ -657,6 +680,7 @@ impl Render {
             camera_points: s.camera_points as usize,
             eps: s.eps,
             mh_rate: s.mh_rate,
+            mh_follow: s.mh_follow,
             mh_escape: s.mh_escape,
             dmin: self.dmin(scene),
             seed: self.sequence.seed,
@@ -733,7 +757,7 @@ pub struct Compare {
     /// The VPL count whose animations the report shows [default: the middle one]
     #[arg(long, allow_hyphen_values = true)]
     pub show_vpls: Option<u32>,
-    /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-escape, eps,
+    /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-follow, mh-escape, eps,
     /// candidates, camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
     /// more. The swept sampler runs once per value and VPL count, drawn as one curve on the
     /// flicker-against-error charts; other samplers draw a curve over --vpls
@@ -750,6 +774,7 @@ pub struct Compare {
 #[serde(rename_all = "kebab-case")]
 pub enum Knob {
     MhRate,
+    MhFollow,
     MhEscape,
     Eps,
     Candidates,
@@ -757,8 +782,9 @@ pub enum Knob {
 }
 
 impl Knob {
-    pub const ALL: [Knob; 5] = [
+    pub const ALL: [Knob; 6] = [
         Knob::MhRate,
+        Knob::MhFollow,
         Knob::MhEscape,
         Knob::Eps,
         Knob::Candidates,
@@ -769,6 +795,7 @@ impl Knob {
     pub fn name(self) -> &'static str {
         match self {
             Knob::MhRate => "mh-rate",
+            Knob::MhFollow => "mh-follow",
             Knob::MhEscape => "mh-escape",
             Knob::Eps => "eps",
             Knob::Candidates => "candidates",
@@ -785,7 +812,7 @@ impl Knob {
     pub fn used_by(self, s: SamplerKind) -> bool {
         use SamplerKind::*;
         match self {
-            Knob::MhRate | Knob::MhEscape => s == Mh,
+            Knob::MhRate | Knob::MhFollow | Knob::MhEscape => s == Mh,
             Knob::Candidates => matches!(s, Cdf | Mh),
             Knob::Eps | Knob::CameraPoints => matches!(s, Cdf | Mh | Rejection),
         }
@@ -795,6 +822,7 @@ impl Knob {
     pub fn set(self, c: &mut SamplerConfig, v: f64) {
         match self {
             Knob::MhRate => c.mh_rate = v as f32,
+            Knob::MhFollow => c.mh_follow = v as f32,
             Knob::MhEscape => c.mh_escape = v as u32,
             Knob::Eps => c.eps = v as f32,
             Knob::Candidates => c.candidates = Some(v as u32),
@@ -892,9 +920,12 @@ pub struct CompareRender {
     /// Distance clamp dmin (see `irad render --help`)
     #[arg(long, allow_hyphen_values = true)]
     pub clamp: Option<f32>,
-    /// MH: probability that a chain proposes in a frame
+    /// MH: probability that a chain proposes in a frame where nothing moves
     #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
     pub mh_rate: f32,
+    /// MH: how fast the proposal rate follows the scene (see `irad render --help`)
+    #[arg(long, default_value_t = SamplerConfig::default().mh_follow, allow_hyphen_values = true)]
+    pub mh_follow: f32,
     /// MH: extra proposals for a chain whose VPL no camera point sees
     #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
     pub mh_escape: u32,
@@ -920,6 +951,7 @@ impl Default for CompareRender {
         CompareRender {
             clamp: r.clamp,
             mh_rate: r.sampler.mh_rate,
+            mh_follow: r.sampler.mh_follow,
             mh_escape: r.sampler.mh_escape,
             camera_points: r.sampler.camera_points,
             eps: r.sampler.eps,
@@ -971,6 +1003,7 @@ impl Compare {
                 camera_points: r.camera_points,
                 eps: r.eps,
                 mh_rate: r.mh_rate,
+                mh_follow: r.mh_follow,
                 mh_escape: r.mh_escape,
             },
             quality: r.quality.clone(),

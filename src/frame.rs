@@ -143,6 +143,25 @@ impl Pipeline {
             }
             None => (image, None),
         };
+        // Emitter edges box-filtered by camera rays (CPU), in place of the sub-samples' steps.
+        let mut image = image;
+        t = Instant::now();
+        let c = &self.renderer.config;
+        let edges = crate::trace::edges::emitter_edges(
+            &frame,
+            &self.tracer,
+            c.width,
+            c.height,
+            c.aa,
+            c.edge_rays,
+        );
+        if !edges.is_empty() {
+            for &(i, d) in &edges {
+                image.hdr.data[i] = (image.hdr.data[i] + d).max(glam::Vec3::ZERO);
+            }
+            image.ldr = image.hdr.to_srgb8(c.exposure);
+        }
+        lap(&mut stages, "emitter_edges", &mut t);
         Ok(FrameOutput {
             index: f,
             time: frame.time,

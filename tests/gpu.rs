@@ -36,8 +36,10 @@ fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
     c.quality.light_samples = light_samples;
     // The CPU twin is the full gather: every pixel gathers every VPL.
     c.quality.interleave = 1;
-    // ... at its centre (the twin samples pixel centres): no supersampling.
+    // ... at its centre (the twin samples pixel centres): no supersampling, and the emitters'
+    // edges left as the pixel centres see them (`trace::edges` is tested on its own).
     c.quality.aa = 1;
+    c.quality.edge_rays = 0;
     c.sampler.camera_points = 64;
     c.sampler.mh_escape = 0;
     c

@@ -28,6 +28,8 @@ pub struct FrameRecord {
     pub paths: u64,
     pub replaced: f32,
     pub acceptance: Option<f32>,
+    /// MH: the frame's proposal rate.
+    pub mh_rate: Option<f32>,
     pub b: Option<f32>,
     pub importance_seconds: f64,
     pub mean_rgb: [f32; 3],
@@ -53,6 +55,7 @@ impl FrameRecord {
             paths: fo.selection.paths,
             replaced: fo.selection.replaced,
             acceptance: fo.selection.acceptance,
+            mh_rate: fo.selection.mh_rate,
             b: fo.selection.b,
             importance_seconds: fo.selection.importance_s,
             mean_rgb: fo.image.hdr.mean().to_array(),

@@ -48,6 +48,8 @@ pub struct RendererConfig {
     /// Supersampling: the passes run on `aa x aa` sub-samples per pixel and `resolve`
     /// box-filters them into pixels (1: one sample at each pixel centre).
     pub aa: u32,
+    /// Camera rays per side for the pixels at emitters' edges (`trace::edges`; 0: off).
+    pub edge_rays: u32,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,

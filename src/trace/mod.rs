@@ -1,6 +1,8 @@
 //! Stage 2: ray tracing on the CPU. An obvhs compressed wide BVH over the frame's triangles,
 //! with closest-hit and occlusion queries; rebuilt only when the geometry moved.
 
+pub mod edges;
+
 use crate::scene::Frame;
 use glam::{Vec3, Vec3A};
 use obvhs::{cwbvh::CwBvh, ray::Ray, ray::RayHit, triangle::Triangle, BvhBuildParams};

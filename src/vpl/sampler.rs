@@ -69,8 +69,12 @@ pub struct SamplerParams {
     pub camera_points: usize,
     /// The defensive floor's factor.
     pub eps: f32,
-    /// MH: probability that a chain proposes in a frame (1: one step a frame).
+    /// MH: probability that a chain proposes in a frame when nothing moves (1: one step a
+    /// frame).
     pub mh_rate: f32,
+    /// MH: how much the proposal rate rises with the target's change from the last frame
+    /// (rate = min(1, mh_rate + mh_follow * d), d its total-variation distance).
+    pub mh_follow: f32,
     /// MH: extra proposals a frame for a chain whose VPL no camera point sees.
     pub mh_escape: u32,
     pub dmin: f32,
@@ -91,6 +95,9 @@ pub struct Selection {
     pub replaced: f32,
     /// MH: fraction of this frame's proposals accepted.
     pub acceptance: Option<f32>,
+    /// MH: the probability that a chain proposed this frame (the base rate raised by how far
+    /// the target moved).
+    pub mh_rate: Option<f32>,
     /// Mean floored importance over the candidates.
     pub b: Option<f32>,
     /// Seconds spent on camera points, importance (and, for mh, re-tracing the chains'

@@ -31,17 +31,35 @@ pub fn fresh_paths(
     target: usize,
     whole: bool,
 ) -> (Vec<Vpl>, u64) {
+    paths_by(
+        frame,
+        tracer,
+        seed,
+        |k| stream * PATHS_PER_FRAME + k,
+        target,
+        whole,
+    )
+}
+
+/// [`fresh_paths`] with the k-th path's id given by `id(k)`.
+pub fn paths_by(
+    frame: &Frame,
+    tracer: &Tracer,
+    seed: u64,
+    id: impl Fn(u64) -> u64 + Sync,
+    target: usize,
+    whole: bool,
+) -> (Vec<Vpl>, u64) {
     let mut vpls = Vec::with_capacity(target + 16);
     let mut paths = 0u64;
     // Batches of paths in parallel, kept in path order.
     while vpls.len() < target && paths < 64 * target as u64 + 1024 {
         let batch = ((target - vpls.len()) / 2).clamp(1, 4096) as u64;
-        let first = stream * PATHS_PER_FRAME + paths;
         let traced: Vec<Vec<Vpl>> = {
             use rayon::prelude::*;
-            (first..first + batch)
+            (paths..paths + batch)
                 .into_par_iter()
-                .map(|p| trace_path(frame, tracer, seed, p))
+                .map(|k| trace_path(frame, tracer, seed, id(k)))
                 .collect()
         };
         for p in traced {
@@ -87,7 +105,10 @@ pub fn mh_accept(current: f32, proposed: f32, u: f32) -> bool {
 /// Candidates of a frame with their floored importance.
 pub struct Candidates {
     pub vpls: Vec<Vpl>,
+    /// Floored importance.
     pub importance: Vec<f32>,
+    /// Importance without the floor.
+    pub raw: Vec<f32>,
     pub paths: u64,
     /// Seconds spent tracing the candidates' paths.
     pub paths_s: f64,
@@ -113,12 +134,34 @@ impl Candidates {
     ) -> Self {
         let t = Instant::now();
         let (vpls, paths) = fresh_paths(frame, tracer, seed, stream, m, false);
-        let paths_s = t.elapsed().as_secs_f64();
+        Self::of(
+            vpls,
+            paths,
+            t.elapsed().as_secs_f64(),
+            tracer,
+            points,
+            eps,
+            dmin,
+        )
+    }
+
+    /// Candidates `vpls` (of `paths` paths, traced in `paths_s` seconds) with their floored
+    /// importance.
+    pub fn of(
+        vpls: Vec<Vpl>,
+        paths: u64,
+        paths_s: f64,
+        tracer: &Tracer,
+        points: &[CameraPoint],
+        eps: f32,
+        dmin: f32,
+    ) -> Self {
         let raw = importance_all(&vpls, points, tracer, dmin);
         let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
         let floor = (eps as f64 * mean) as f32;
         Candidates {
             importance: raw.iter().map(|&x| x + floor).collect(),
+            raw,
             vpls,
             paths,
             paths_s,

@@ -1,4 +1,25 @@
-//! `mh`: one Metropolis-Hastings chain per slot, one step a frame (see the module docs).
+//! `mh`: one Metropolis-Hastings chain per slot, at most one step a frame (see the module
+//! docs).
+//!
+//! What a kept chain's weight `b / (N I) * (M / P)` may change with, and what it does not:
+//! - `I`, its importance over the camera points, changes only as its VPL or the view moves
+//!   (the camera points' jitter is the same every frame).
+//! - `b` and `M / P` come from a *normalization pool*: M candidates whose light paths are
+//!   re-traced in each frame's scene and each re-drawn only every `1 / mh_rate` frames, at its
+//!   own phase, so a fraction `mh_rate` of the pool is new each frame, the rate at which the
+//!   chains themselves renew in a still scene. Estimated from each frame's fresh candidates, b
+//!   jumped 1-7% a frame and scaled every kept VPL with it; from the pool it moves by about
+//!   `sqrt(2 mh_rate)` of that, and over time every pool path is replaced, so its error
+//!   averages out (a pool that never renewed would keep one draw's error for good).
+//! - Proposals come from the frame's fresh candidates (an independence proposal from p, as
+//!   before), so over time the chains still explore every path; only the proposed candidates'
+//!   importance is evaluated.
+//! - The rate at which chains propose follows the scene: `min(1, mh_rate + mh_follow * d)`,
+//!   with `d` the total-variation distance between this frame's and the last frame's target
+//!   over the pool's paths that were in it both frames (the fraction of the target's mass that
+//!   moved). A still scene gives `d = 0` and chains propose at the base rate; a moving light or
+//!   view raises the rate so chains follow it. `d` depends on the pool only, never on the
+//!   chains' states, so each frame's step is a lazy MH kernel that keeps that frame's target.
 
 use super::common::{cdf_draw, key, mh_accept, weighted, Candidates, Key};
 use super::{SamplerParams, Selection, VplSampler};
@@ -6,14 +27,40 @@ use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
 use crate::vpl::importance::{camera_points, importance, CameraPoint};
+use crate::vpl::sampler::common::{fresh_paths, paths_by, PATHS_PER_FRAME};
 use crate::vpl::{trace_path, Vpl};
 use rand::Rng;
+use rayon::prelude::*;
+use std::collections::HashMap;
 use std::time::Instant;
+
+/// The id of the normalization pool's k-th path in frame `f`: re-drawn every `1 / rate`
+/// frames (rounded), at a phase of its own. Its stream, `2^31 + generation`, is above every
+/// frame's fresh stream (frames use streams 0, 1, ...).
+pub fn pool_path(seed: u64, k: u64, f: u64, rate: f32) -> u64 {
+    let period = (1.0 / rate.max(1e-9) as f64).round().clamp(1.0, 1e9) as u64;
+    let phase = crate::math::stream_seed(&[seed, k, 0x9001]) % period;
+    ((1 << 31) + (f + phase) / period) * PATHS_PER_FRAME + k
+}
 
 pub struct Mh {
     params: SamplerParams,
     /// The VPL each chain is on, by key; empty before the first frame.
     chains: Vec<Key>,
+    /// The pool's importance (without the floor, which moves as the pool renews) last frame,
+    /// by key.
+    last_pool: HashMap<Key, f32>,
+}
+
+/// One chain's random numbers for a frame, drawn before any importance is known so that the
+/// stream does not depend on outcomes.
+struct Draws {
+    propose: bool,
+    /// The proposal, as a fraction of the fresh candidates.
+    j: f64,
+    u: f32,
+    /// Escape proposals, as fractions of the fresh candidates.
+    escape: Vec<f64>,
 }
 
 impl Mh {
@@ -21,11 +68,12 @@ impl Mh {
         Mh {
             params: params.clone(),
             chains: Vec::new(),
+            last_pool: HashMap::new(),
         }
     }
 
-    /// Each chain's VPL re-traced in this frame with its importance (None: its path no longer
-    /// reaches that depth).
+    /// Each chain's VPL re-traced in this frame with its floored importance (None: its path no
+    /// longer reaches that depth).
     fn current(
         &self,
         frame: &Frame,
@@ -33,7 +81,6 @@ impl Mh {
         points: &[CameraPoint],
         floor: f32,
     ) -> Vec<Option<(Vpl, f32)>> {
-        use rayon::prelude::*;
         let p = &self.params;
         self.chains
             .par_iter()
@@ -47,46 +94,45 @@ impl Mh {
             .collect()
     }
 
-    /// One step of every chain: propose a uniformly chosen candidate (with probability
-    /// `mh_rate`), accept with min(1, I'/I), then escape a VPL no camera point sees.
-    fn step(
-        &self,
-        current: Vec<Option<(Vpl, f32)>>,
-        c: &Candidates,
-        r: &mut impl Rng,
-    ) -> (Vec<Vpl>, Vec<f32>, f32) {
-        let p = &self.params;
-        let n = current.len();
-        let mut chosen = Vec::with_capacity(n);
-        let mut imp = Vec::with_capacity(n);
-        let (mut accepted, mut proposals) = (0usize, 0usize);
-        for cur in current {
-            let j = r.random_range(0..c.vpls.len());
-            let u: f32 = r.random();
-            let propose = r.random::<f32>() < p.mh_rate || cur.is_none();
-            proposals += propose as usize;
-            let (mut v, mut i) = match cur {
-                Some((v, i)) if !propose || !mh_accept(i, c.importance[j], u) => (v, i),
-                _ => {
-                    accepted += 1;
-                    (c.vpls[j], c.importance[j])
-                }
-            };
-            // Escape: a chain on a VPL no camera point sees (I at the floor) tries up to
-            // `mh_escape` more proposals this frame and takes the first that is seen.
-            if i <= c.floor {
-                for _ in 0..p.mh_escape {
-                    let k = r.random_range(0..c.vpls.len());
-                    if c.importance[k] > c.floor {
-                        (v, i) = (c.vpls[k], c.importance[k]);
-                        break;
-                    }
-                }
-            }
-            chosen.push(v);
-            imp.push(i);
+    /// Total-variation distance between the pool's normalized target last frame and now, over
+    /// the paths that were in the pool both frames (0 on the first frame).
+    fn change(&self, pool: &Candidates) -> f32 {
+        use std::collections::HashSet;
+        if self.last_pool.is_empty() {
+            return 0.0;
         }
-        (chosen, imp, accepted as f32 / proposals.max(1) as f32)
+        let now_paths: HashSet<u64> = pool.vpls.iter().map(|v| v.path).collect();
+        let before_paths: HashSet<u64> = self.last_pool.keys().map(|k| k.0).collect();
+        let now: Vec<(Key, f64)> = pool
+            .vpls
+            .iter()
+            .zip(&pool.raw)
+            .filter(|(v, _)| before_paths.contains(&v.path))
+            .map(|(v, &i)| (key(v), i as f64))
+            .collect();
+        let before: HashMap<Key, f64> = self
+            .last_pool
+            .iter()
+            .filter(|(k, _)| now_paths.contains(&k.0))
+            .map(|(&k, &i)| (k, i as f64))
+            .collect();
+        let (sn, sb) = (
+            now.iter().map(|x| x.1).sum::<f64>(),
+            before.values().sum::<f64>(),
+        );
+        if sn <= 0.0 || sb <= 0.0 {
+            return if sn == sb { 0.0 } else { 1.0 };
+        }
+        let mut matched = 0.0f64;
+        let mut d = 0.0f64;
+        for (k, i) in &now {
+            let b = before.get(k).copied().unwrap_or(0.0);
+            matched += b;
+            d += (i / sn - b / sb).abs();
+        }
+        // VPLs of last frame that are gone (their paths got shorter).
+        d += (sb - matched).max(0.0) / sb;
+        (0.5 * d).min(1.0) as f32
     }
 }
 
@@ -95,39 +141,171 @@ impl VplSampler for Mh {
         let p = self.params.clone();
         let t = Instant::now();
         let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
-        let c = Candidates::new(
+        let t_pool = Instant::now();
+        let (vpls, paths) = paths_by(
             frame,
             tracer,
-            &points,
             p.seed,
-            f,
+            |k| pool_path(p.seed, k, f, p.mh_rate),
             p.candidates,
-            p.eps,
-            p.dmin,
+            false,
         );
-        if c.vpls.is_empty() {
+        let paths_s = t_pool.elapsed().as_secs_f64();
+        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.eps, p.dmin);
+        let mut paths_s = pool.paths_s;
+        if pool.vpls.is_empty() {
             self.chains.clear();
+            self.last_pool.clear();
             return Selection {
-                paths: c.paths,
-                importance_s: t.elapsed().as_secs_f64() - c.paths_s,
+                paths: pool.paths,
+                importance_s: t.elapsed().as_secs_f64() - paths_s,
                 ..Default::default()
             };
         }
+        let rate = (p.mh_rate + p.mh_follow * self.change(&pool)).min(1.0);
+        self.last_pool = pool
+            .vpls
+            .iter()
+            .zip(&pool.raw)
+            .map(|(v, &i)| (key(v), i))
+            .collect();
         let n = p.slots;
         let mut r = rng(&[p.seed, f, 0x5a3b]);
-        let (chosen, imp, acceptance) = if self.chains.len() == n {
-            let current = self.current(frame, tracer, &points, c.floor);
-            self.step(current, &c, &mut r)
+        let (chosen, imp, acceptance, fresh_paths_n) = if self.chains.len() != n {
+            // Chains start from a CDF draw over the pool.
+            let idx = cdf_draw(&pool.importance, n, &mut r);
+            let chosen: Vec<Vpl> = idx.iter().map(|&i| pool.vpls[i]).collect();
+            let imp = idx.iter().map(|&i| pool.importance[i]).collect();
+            (chosen, imp, 1.0, 0)
         } else {
-            // Chains start from a CDF draw.
-            let idx = cdf_draw(&c.importance, n, &mut r);
-            let chosen: Vec<Vpl> = idx.iter().map(|&i| c.vpls[i]).collect();
-            let imp = idx.iter().map(|&i| c.importance[i]).collect();
-            (chosen, imp, 1.0)
+            let current = self.current(frame, tracer, &points, pool.floor);
+            let draws: Vec<Draws> = current
+                .iter()
+                .map(|cur| Draws {
+                    j: r.random(),
+                    u: r.random(),
+                    propose: r.random::<f32>() < rate || cur.is_none(),
+                    escape: (0..p.mh_escape).map(|_| r.random()).collect(),
+                })
+                .collect();
+            // Fresh candidates only when some chain proposes or may escape.
+            let wanted = draws.iter().zip(&current).any(|(d, c)| {
+                d.propose || (p.mh_escape > 0 && c.is_some_and(|(_, i)| i <= pool.floor))
+            });
+            let t_paths = Instant::now();
+            let (fresh, fresh_paths_n) = if wanted {
+                fresh_paths(frame, tracer, p.seed, f, p.candidates, false)
+            } else {
+                (Vec::new(), 0)
+            };
+            paths_s += t_paths.elapsed().as_secs_f64();
+            let pick = |x: f64| ((x * fresh.len() as f64) as usize).min(fresh.len() - 1);
+            let mut memo = vec![None; fresh.len()];
+            let step = Step {
+                fresh: &fresh,
+                points: &points,
+                tracer,
+                dmin: p.dmin,
+                floor: pool.floor,
+            };
+            if !fresh.is_empty() {
+                step.eval(
+                    &mut memo,
+                    draws.iter().filter(|d| d.propose).map(|d| pick(d.j)),
+                );
+            }
+            // Accept or keep.
+            let (mut accepted, mut proposals) = (0usize, 0usize);
+            let mut state: Vec<Option<(Vpl, f32)>> = current
+                .into_iter()
+                .zip(&draws)
+                .map(|(cur, d)| {
+                    if !d.propose || fresh.is_empty() {
+                        return cur;
+                    }
+                    proposals += 1;
+                    let j = pick(d.j);
+                    let ij = memo[j].expect("evaluated above");
+                    match cur {
+                        Some((v, i)) if !mh_accept(i, ij, d.u) => Some((v, i)),
+                        _ => {
+                            accepted += 1;
+                            Some((fresh[j], ij))
+                        }
+                    }
+                })
+                .collect();
+            // Escape: a chain on a VPL no camera point sees (I at the floor) takes the first
+            // of its escape proposals that some camera point sees.
+            let hidden = |s: &Option<(Vpl, f32)>| s.is_none_or(|(_, i)| i <= pool.floor);
+            if !fresh.is_empty() && p.mh_escape > 0 {
+                let escaping = state.iter().zip(&draws).filter(|(s, _)| hidden(s));
+                step.eval(
+                    &mut memo,
+                    escaping.flat_map(|(_, d)| d.escape.iter().map(|&x| pick(x))),
+                );
+                for (s, d) in state.iter_mut().zip(&draws) {
+                    if hidden(s) {
+                        let seen = d
+                            .escape
+                            .iter()
+                            .map(|&x| pick(x))
+                            .find(|&k| memo[k].expect("evaluated above") > pool.floor);
+                        if let Some(k) = seen {
+                            *s = Some((fresh[k], memo[k].expect("evaluated above")));
+                        }
+                    }
+                }
+            }
+            let (mut chosen, mut imp) = (Vec::with_capacity(n), Vec::with_capacity(n));
+            for (v, i) in state.into_iter().flatten() {
+                chosen.push(v);
+                imp.push(i);
+            }
+            (
+                chosen,
+                imp,
+                accepted as f32 / proposals.max(1) as f32,
+                fresh_paths_n,
+            )
         };
         self.chains = chosen.iter().map(key).collect();
-        let mut s = weighted(chosen, &imp, c.scale(n), c.paths, c.b, Some(acceptance));
-        s.importance_s = t.elapsed().as_secs_f64() - c.paths_s;
+        let traced = pool.paths + fresh_paths_n;
+        let mut s = weighted(
+            chosen,
+            &imp,
+            pool.scale(n),
+            traced,
+            pool.b,
+            Some(acceptance),
+        );
+        s.mh_rate = Some(rate);
+        s.importance_s = t.elapsed().as_secs_f64() - paths_s;
         s
+    }
+}
+
+/// What evaluating fresh candidates needs.
+struct Step<'a> {
+    fresh: &'a [Vpl],
+    points: &'a [CameraPoint],
+    tracer: &'a Tracer,
+    dmin: f32,
+    floor: f32,
+}
+
+impl Step<'_> {
+    /// Floored importance of the fresh candidates at `idx`, each evaluated once.
+    fn eval(&self, memo: &mut [Option<f32>], idx: impl Iterator<Item = usize>) {
+        let mut need: Vec<usize> = idx.filter(|&j| memo[j].is_none()).collect();
+        need.sort_unstable();
+        need.dedup();
+        let got: Vec<f32> = need
+            .par_iter()
+            .map(|&j| importance(&self.fresh[j], self.points, self.tracer, self.dmin) + self.floor)
+            .collect();
+        for (j, i) in need.into_iter().zip(got) {
+            memo[j] = Some(i);
+        }
     }
 }
