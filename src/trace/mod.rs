@@ -17,11 +17,16 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// Ray-tracing acceleration over one frame's triangles.
+/// Ray-tracing acceleration over one frame's triangles: a BVH over the triangles that have
+/// not moved and a small one over those that have (an animated emitter, a moving object), so
+/// that a frame in which a few triangles move rebuilds only the small one.
 pub struct Tracer {
-    bvh: CwBvh,
+    /// The triangles that were still when it was last built, and those that moved.
+    still: Part,
+    moving: Part,
+    /// Every triangle of the frame, by the frame's index.
     tris: Vec<Triangle>,
-    /// How many times the BVH was built (for tests and run records).
+    /// How many times a BVH was built (for tests and run records).
     pub builds: usize,
     /// Seconds spent in the last build (0 if the last update kept the BVH).
     pub last_build_s: f64,
@@ -31,6 +36,28 @@ pub struct Tracer {
     /// is passed through.
     cutouts: Option<Box<Frame>>,
 }
+
+/// A BVH over some of the frame's triangles.
+struct Part {
+    /// None when it holds no triangle.
+    bvh: Option<CwBvh>,
+    /// The frame's index of each of its triangles.
+    ids: Vec<u32>,
+}
+
+impl Part {
+    fn over(tris: &[Triangle], ids: Vec<u32>) -> Part {
+        let own: Vec<Triangle> = ids.iter().map(|&i| tris[i as usize]).collect();
+        Part {
+            bvh: (!own.is_empty()).then(|| build(&own)),
+            ids,
+        }
+    }
+}
+
+/// Moved triangles a frame may have, as a fraction of all, for the BVH to be split into still
+/// and moving ones rather than rebuilt whole.
+const MOVING_SHARE: usize = 8;
 
 /// Barycentrics (b1, b2) of point `p` on triangle `t`, from areas (robust for any winding).
 fn barycentrics(t: &Triangle, p: Vec3A) -> (f32, f32) {
@@ -65,10 +92,11 @@ impl Tracer {
     pub fn new(frame: &Frame) -> Self {
         let start = std::time::Instant::now();
         let tris = to_obvhs(frame);
-        let bvh = build(&tris);
+        let still = Part::over(&tris, (0..tris.len() as u32).collect());
         let (lo, hi) = frame.bounds();
         Tracer {
-            bvh,
+            still,
+            moving: Part::over(&[], Vec::new()),
             tris,
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
@@ -77,10 +105,11 @@ impl Tracer {
         }
     }
 
-    /// Distance to triangle `id` of the BVH along `r`, or infinity (a miss, or a point an
-    /// alpha MASK cuts away).
-    fn hit_distance(&self, r: &Ray, id: usize) -> f32 {
-        let k = self.bvh.primitive_indices[id] as usize;
+    /// Distance along `r` to the `id`-th triangle of `part`'s BVH, or infinity (a miss, or a
+    /// point an alpha MASK cuts away).
+    fn hit_distance(&self, part: &Part, r: &Ray, id: usize) -> f32 {
+        let k =
+            part.ids[part.bvh.as_ref().expect("traversed").primitive_indices[id] as usize] as usize;
         let t = self.tris[k].intersect(r);
         if let Some(f) = &self.cutouts {
             if t < f32::INFINITY {
@@ -94,21 +123,61 @@ impl Tracer {
         t
     }
 
-    /// Brings the BVH to `frame`'s geometry; rebuilds only if a vertex moved. Returns whether
-    /// it rebuilt.
+    /// Brings the BVH to `frame`'s geometry; rebuilds only if a vertex moved, and then, when
+    /// few triangles moved, only the BVH of the moving ones (the first time some move, the
+    /// still ones' too, without them). Returns whether it rebuilt.
     pub fn update(&mut self, frame: &Frame) -> bool {
-        let same = self.tris.len() == frame.tris.len()
-            && self.tris.iter().zip(&frame.tris).all(|(t, f)| {
-                Vec3::from(t.v0) == f[0] && Vec3::from(t.v1) == f[1] && Vec3::from(t.v2) == f[2]
-            });
-        if same {
+        let start = std::time::Instant::now();
+        if self.tris.len() != frame.tris.len() {
+            return self.rebuild(frame);
+        }
+        let moved: Vec<u32> = (0..frame.tris.len() as u32)
+            .filter(|&i| {
+                let (t, f) = (&self.tris[i as usize], &frame.tris[i as usize]);
+                Vec3::from(t.v0) != f[0] || Vec3::from(t.v1) != f[1] || Vec3::from(t.v2) != f[2]
+            })
+            .collect();
+        if moved.is_empty() {
             self.last_build_s = 0.0;
             return false;
         }
+        let mut ids = self.moving.ids.clone();
+        ids.extend(&moved);
+        ids.sort_unstable();
+        ids.dedup();
+        if ids.len() * MOVING_SHARE > self.tris.len() {
+            return self.rebuild(frame);
+        }
+        self.tris = to_obvhs(frame);
+        if ids.len() != self.moving.ids.len() {
+            let mut is_moving = vec![false; self.tris.len()];
+            for &i in &ids {
+                is_moving[i as usize] = true;
+            }
+            let still = (0..self.tris.len() as u32).filter(|&i| !is_moving[i as usize]);
+            self.still = Part::over(&self.tris, still.collect());
+            self.builds += 1;
+        }
+        self.moving = Part::over(&self.tris, ids);
+        self.builds += 1;
+        if self.cutouts.is_some() {
+            self.cutouts = Some(Box::new(frame.clone()));
+        }
+        self.last_build_s = start.elapsed().as_secs_f64();
+        true
+    }
+
+    /// Rebuilds everything for `frame`, counting the builds so far.
+    fn rebuild(&mut self, frame: &Frame) -> bool {
         let builds = self.builds;
         *self = Tracer::new(frame);
         self.builds = builds + 1;
         true
+    }
+
+    /// How many of the frame's triangles the small BVH of moving ones holds.
+    pub fn moving_triangles(&self) -> usize {
+        self.moving.ids.len()
     }
 
     /// The offset used to move ray origins off surfaces.
@@ -118,24 +187,23 @@ impl Tracer {
 
     /// Closest hit along `dir` (unit) from `origin`, within `tmax`.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
-        let ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
-        let mut hit = RayHit::none();
-        if self
-            .bvh
-            .ray_traverse(ray, &mut hit, |r, id| self.hit_distance(r, id))
-        {
-            let tri = self.bvh.primitive_indices[hit.primitive_id as usize];
-            let p: Vec3A = Vec3A::from(origin) + Vec3A::from(dir) * hit.t;
-            let (b1, b2) = barycentrics(&self.tris[tri as usize], p);
-            Some(Hit {
-                t: hit.t,
-                tri,
-                b1,
-                b2,
-            })
-        } else {
-            None
+        let mut ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
+        let mut best = None;
+        for part in [&self.still, &self.moving] {
+            let Some(bvh) = &part.bvh else { continue };
+            let mut hit = RayHit::none();
+            if bvh.ray_traverse(ray, &mut hit, |r, id| self.hit_distance(part, r, id)) {
+                ray.tmax = hit.t;
+                best = Some((
+                    hit.t,
+                    part.ids[bvh.primitive_indices[hit.primitive_id as usize] as usize],
+                ));
+            }
         }
+        let (t, tri) = best?;
+        let p: Vec3A = Vec3A::from(origin) + Vec3A::from(dir) * t;
+        let (b1, b2) = barycentrics(&self.tris[tri as usize], p);
+        Some(Hit { t, tri, b1, b2 })
     }
 
     /// Whether anything lies on the segment from `a` to `b` (end points excluded by offsets
@@ -150,9 +218,11 @@ impl Tracer {
             return false;
         }
         let ray = Ray::new(a.into(), (d / len).into(), 0.0, len * (1.0 - 1e-4));
-        !self
-            .bvh
-            .ray_traverse_miss(ray, |r, id| self.hit_distance(r, id))
+        [&self.still, &self.moving].into_iter().any(|part| {
+            part.bvh.as_ref().is_some_and(|bvh| {
+                !bvh.ray_traverse_miss(ray, |r, id| self.hit_distance(part, r, id))
+            })
+        })
     }
 
     /// Offsets a surface point off its triangle, to the side `dir` leaves from.
@@ -195,6 +265,52 @@ mod tests {
         assert!(tr.occluded(under, Vec3::Y, Vec3::new(0.0, 0.99, 0.01), Vec3::NEG_Y));
         let open = Vec3::new(0.0, -1.0, 0.9);
         assert!(!tr.occluded(open, Vec3::Y, Vec3::new(0.0, 0.99, 0.01), Vec3::NEG_Y));
+    }
+
+    #[test]
+    fn a_moving_light_rebuilds_only_its_own_bvh_and_rays_agree_with_a_fresh_one() {
+        use crate::math::rng;
+        use rand::Rng;
+        // cornell-light: its emitter quad (2 of the box's triangles) slides.
+        let scene = builtin::load("cornell-light").unwrap().unwrap();
+        let mut tr = Tracer::new(&scene.at(0.0));
+        assert!(tr.update(&scene.at(0.25)));
+        assert_eq!(
+            (tr.builds, tr.moving_triangles()),
+            (3, 2),
+            "still and moving built"
+        );
+        let f = scene.at(0.5);
+        assert!(tr.update(&f));
+        assert_eq!(tr.builds, 4, "only the moving triangles' BVH is rebuilt");
+        let fresh = Tracer::new(&f);
+        let mut r = rng(&[5, 6]);
+        let (mut hits, mut light_hits, mut blocked) = (0, 0, 0);
+        for _ in 0..20_000 {
+            let o = Vec3::new(r.random(), r.random(), r.random()) * 1.9 - 0.95;
+            let n = if r.random::<bool>() {
+                Vec3::Y
+            } else {
+                -Vec3::Y
+            };
+            let d = crate::math::cosine_hemisphere(n, glam::Vec2::new(r.random(), r.random()));
+            let (a, b) = (tr.intersect(o, d, 10.0), fresh.intersect(o, d, 10.0));
+            assert_eq!(a.map(|h| h.tri), b.map(|h| h.tri), "from {o} along {d}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a.t - b.t).abs() < 1e-5 && (a.b1 - b.b1).abs() < 1e-4);
+                hits += 1;
+                light_hits += (f.emission(a.tri as usize).max_element() > 0.0) as usize;
+            }
+            let e = o + d * 1.5;
+            let occ = tr.occluded(o, d, e, -d);
+            assert_eq!(occ, fresh.occluded(o, d, e, -d), "segment {o} to {e}");
+            blocked += occ as usize;
+        }
+        // The rays must reach both BVHs for this to test anything.
+        assert!(
+            hits > 15_000 && light_hits > 20 && blocked > 1000,
+            "{hits} {light_hits} {blocked}"
+        );
     }
 
     #[test]
