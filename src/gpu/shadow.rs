@@ -61,6 +61,33 @@ pub fn face_bases(n: Vec3) -> [(Vec3, Vec3, Vec3); 5] {
     [(t, b, n), (b, n, t), (b, n, -t), (t, n, b), (t, n, -b)]
 }
 
+/// Whether the 90-degree frustum at `eye` along `f` (half-widths along `r` and `u`) can hold
+/// a point of the box `(lo, hi)`: false only if the whole box lies behind it or outside one
+/// of its four sides (a conservative test: a face it keeps may still see nothing).
+pub fn frustum_meets_box(eye: Vec3, (r, u, f): (Vec3, Vec3, Vec3), (lo, hi): (Vec3, Vec3)) -> bool {
+    if lo.cmpgt(hi).any() {
+        return false;
+    }
+    let (c, h) = ((lo + hi) * 0.5 - eye, (hi - lo) * 0.5);
+    // A margin of a millionth of the box's size keeps a face whose side only touches it.
+    let tol = 1e-6 * (h.length() + c.length());
+    [f, f - r, f + r, f - u, f + u]
+        .iter()
+        .all(|m| m.dot(c) + m.abs().dot(h) >= -tol * m.length())
+}
+
+/// The faces (index into [`face_bases`], and its axes) that sample `s`'s shadow map draws:
+/// of those its kind needs ([`EmitterSample::faces`]), the ones whose frustum meets the
+/// geometry its light can reach. A receiver's direction always falls in a drawn face.
+pub fn drawn_faces(s: &EmitterSample) -> impl Iterator<Item = (usize, (Vec3, Vec3, Vec3))> + '_ {
+    let single = s.faces() == 1;
+    face_bases(s.normal)
+        .into_iter()
+        .take(s.faces())
+        .enumerate()
+        .filter(move |&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
+}
+
 pub struct ShadowMaps {
     pipeline: wgpu::RenderPipeline,
     uniform: wgpu::Buffer,
@@ -140,8 +167,8 @@ impl ShadowMaps {
         }
     }
 
-    /// Renders the shadow maps of `samples` (the faces [`EmitterSample::faces`] says, face
-    /// `k` of sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
+    /// Renders the shadow maps of `samples` (the faces [`drawn_faces`] gives, face `k` of
+    /// sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
     /// unless they are the ones last drawn and the geometry did not move. Returns whether it
     /// drew.
     #[allow(clippy::too_many_arguments)]
@@ -168,7 +195,7 @@ impl ShadowMaps {
                 SampleKind::PointCone { tan_half } => 1.0 / tan_half,
                 _ => 1.0,
             };
-            for (k, (r, u, f)) in face_bases(s.normal).into_iter().take(s.faces()).enumerate() {
+            for (k, (r, u, f)) in drawn_faces(s) {
                 let (r, u) = (r * zoom, u * zoom);
                 let face = Face {
                     pos: s.position.extend(1.0).to_array(),
@@ -205,5 +232,98 @@ impl ShadowMaps {
         }
         self.last = Some(bytes);
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng;
+    use crate::scene::{EmitterSample, SampleKind};
+    use rand::Rng;
+
+    /// The face `shaders/direct.wgsl`'s `face_coords` reads for direction `l` from a sample
+    /// with normal `n`: the largest of the components along (t, b, n).
+    fn face_read(n: Vec3, l: Vec3) -> usize {
+        let (t, b) = crate::math::basis(n);
+        let (x, y, z) = (l.dot(t), l.dot(b), l.dot(n));
+        if z >= x.abs() && z >= y.abs() {
+            0
+        } else if x.abs() >= y.abs() {
+            if x > 0.0 {
+                1
+            } else {
+                2
+            }
+        } else if y > 0.0 {
+            3
+        } else {
+            4
+        }
+    }
+
+    fn v(r: &mut impl Rng) -> Vec3 {
+        Vec3::new(r.random(), r.random(), r.random()) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn every_lit_point_of_the_box_falls_in_a_drawn_face() {
+        let mut r = rng(&[31, 7]);
+        let (mut culled, mut points) = (0, 0);
+        for _ in 0..2000 {
+            let (a, b) = (v(&mut r) * 3.0, v(&mut r) * 3.0);
+            let sample = EmitterSample {
+                position: v(&mut r) * 4.0,
+                normal: v(&mut r).normalize(),
+                radiance: Vec3::ONE,
+                kind: SampleKind::Area,
+                reach: 0.0,
+                sees: (a.min(b), a.max(b)),
+            };
+            let drawn: Vec<usize> = drawn_faces(&sample).map(|(k, _)| k).collect();
+            culled += 5 - drawn.len();
+            for _ in 0..50 {
+                let u = Vec3::new(r.random(), r.random(), r.random());
+                let p = a.min(b) + u * (a - b).abs();
+                let l = p - sample.position;
+                if l.dot(sample.normal) > 0.0 {
+                    points += 1;
+                    let k = face_read(sample.normal, l);
+                    assert!(
+                        drawn.contains(&k),
+                        "{p} reads face {k} of {sample:?}, drawn {drawn:?}"
+                    );
+                }
+            }
+        }
+        // Random boxes miss some faces often enough that the test means something.
+        assert!(
+            culled > 2000 && points > 20_000,
+            "{culled} faces culled, {points} points"
+        );
+    }
+
+    #[test]
+    fn a_sample_high_above_a_box_within_45_degrees_draws_its_front_face_only() {
+        let s = EmitterSample {
+            position: Vec3::new(0.0, 10.0, 0.0),
+            normal: Vec3::NEG_Y,
+            radiance: Vec3::ONE,
+            kind: SampleKind::Area,
+            reach: 0.0,
+            sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 1.0, 8.0)),
+        };
+        assert_eq!(drawn_faces(&s).map(|(k, _)| k).collect::<Vec<_>>(), [0]);
+        // A box reaching past 45 degrees along +x needs that side's face too.
+        let wide = EmitterSample {
+            sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(11.0, 1.0, 8.0)),
+            ..s
+        };
+        assert_eq!(drawn_faces(&wide).count(), 2);
+        assert!(!frustum_meets_box(
+            Vec3::ZERO,
+            (Vec3::X, Vec3::Y, Vec3::Z),
+            (Vec3::new(-1.0, -1.0, -3.0), Vec3::new(1.0, 1.0, -2.0))
+        ));
     }
 }

@@ -12,6 +12,7 @@ pub mod load;
 pub mod texture;
 
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use std::collections::HashMap;
 use std::sync::Arc;
 
 pub use anim::{Channel, Interpolation, Property};
@@ -366,6 +367,20 @@ impl Frame {
     pub fn bounds(&self) -> (Vec3, Vec3) {
         bounds(self.tris.iter().flatten().copied())
     }
+
+    /// The box around every triangle with a vertex in front of the plane through `p` with
+    /// normal `n` (the whole triangle, so it holds every point light from `p` can reach); an
+    /// empty box (lo > hi) if there is none.
+    pub fn bounds_in_front(&self, p: Vec3, n: Vec3) -> (Vec3, Vec3) {
+        let eps = 1e-5 * self.emitters.sphere.1;
+        bounds(
+            self.tris
+                .iter()
+                .filter(|t| t.iter().any(|&v| n.dot(v - p) > eps))
+                .flatten()
+                .copied(),
+        )
+    }
 }
 
 pub(crate) fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
@@ -674,6 +689,10 @@ pub struct EmitterSample {
     /// sphere around the geometry, far side), so that its shadow maps reach that far; 0 for
     /// points on emitter triangles (which lie within the geometry).
     pub reach: f32,
+    /// The box (lo, hi) around the geometry its light can reach: the triangles in front of
+    /// an area sample's triangle or a half point light's plane, else the whole frame's. Its
+    /// shadow map draws only the hemicube faces whose frustum meets it.
+    pub sees: (Vec3, Vec3),
 }
 
 /// What an [`EmitterSample`] stands for, and so how its light reaches a point.
@@ -765,11 +784,16 @@ impl Frame {
             return out;
         }
         let mut r = crate::math::rng(&[seed, 0xd1ec7]);
+        // The box in front of each emitter triangle drawn from, computed once a frame.
+        let mut front: HashMap<usize, (Vec3, Vec3)> = HashMap::new();
         out.extend((0..count).map(|j| {
             let u = ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7);
             let (e, p_e) = em.pick(u);
             let tri = em.tris[e] as usize;
             let b = crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
+            let sees = *front
+                .entry(tri)
+                .or_insert_with(|| self.bounds_in_front(self.tris[tri][0], self.normals[tri]));
             EmitterSample {
                 position: self.point(tri, b.x, b.y),
                 normal: self.normals[tri],
@@ -777,6 +801,7 @@ impl Frame {
                     * (self.areas[tri] / (p_e * count as f32)),
                 kind: SampleKind::Area,
                 reach: 0.0,
+                sees,
             }
         }));
         out
@@ -845,6 +870,7 @@ impl Frame {
         let radiance = l.intensity * weight;
         let (c, r) = self.emitters.sphere;
         let reach = (l.position - c).length() + r;
+        let sees = self.bounds();
         match l.kind {
             LightKind::Point if half.is_none() && self.cone_of(l).is_some() => {
                 let (axis, tan_half) = self.cone_of(l).unwrap();
@@ -854,6 +880,7 @@ impl Frame {
                     radiance,
                     kind: SampleKind::PointCone { tan_half },
                     reach,
+                    sees,
                 });
             }
             LightKind::Point => {
@@ -875,6 +902,7 @@ impl Frame {
                         radiance: radiance * scale,
                         kind: SampleKind::PointHalf,
                         reach,
+                        sees: self.bounds_in_front(l.position, axis * s),
                     });
                 }
             }
@@ -890,6 +918,7 @@ impl Frame {
                     cos_outer,
                 },
                 reach,
+                sees,
             }),
             LightKind::Directional => {
                 let extent = r * 1.01;
@@ -899,6 +928,7 @@ impl Frame {
                     radiance,
                     kind: SampleKind::Directional { extent },
                     reach: 2.0 * extent,
+                    sees,
                 });
             }
         }
