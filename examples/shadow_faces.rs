@@ -12,7 +12,7 @@ fn main() -> anyhow::Result<()> {
     let frame = scene.at(t);
     let samples = frame.emitter_samples(1, 32);
     let needed: usize = samples.iter().map(|s| s.faces()).sum();
-    let drawn: usize = samples.iter().map(|s| drawn_faces(s).count()).sum();
+    let drawn: usize = samples.iter().map(|s| drawn_faces(s).len()).sum();
     println!(
         "{name} at t = {t}: {} samples, {needed} faces by kind, {drawn} drawn",
         samples.len()

@@ -32,6 +32,9 @@ struct LightSample {
     pos: vec4f,
     normal: vec4f,
     radiance: vec4f,
+    // One windowed shadow face (z > 0): the window's centre (x, y) and scale (z, w) in the
+    // plane at unit distance along the normal; see `shadow::Window`.
+    window: vec4f,
 }
 
 // Frame constants, the same buffer for every pass.

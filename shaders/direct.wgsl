@@ -104,6 +104,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             zoom = 1.0 / ls.normal.w;
             fc = vec4f(0.0, l.x / l.z * zoom, l.y / l.z * zoom, 0.0);
         }
+        if ls.window.z > 0.0 {
+            // One face over the window that holds the geometry (`shadow::Window`).
+            fc = vec4f(0.0, (l.x / l.z - ls.window.x) * ls.window.z, (l.y / l.z - ls.window.y) * ls.window.w, 0.0);
+            zoom = min(ls.window.z, ls.window.w);
+        }
         let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
         let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u + u32(fc.x)), 0).x);
         let tan_x = slope(cos_x);

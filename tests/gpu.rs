@@ -162,18 +162,19 @@ fn gpu_matches_cpu_twin_direct_indirect_and_composed() {
     }
 }
 
-/// The atrium's sun lies far above the court, so most of its hemicube faces look past the
-/// geometry and are not drawn (`gpu::shadow::drawn_faces`): its direct light must still match
-/// the CPU twin's exact visibility, as the Cornell box's (all faces drawn) does above.
+/// The atrium's sun lies far above the court, so each of its samples draws one shadow face
+/// over the window the court projects into instead of five hemicube faces
+/// (`gpu::shadow::drawn_faces`): its direct light must still match the CPU twin's exact
+/// visibility, as the Cornell box's (all faces drawn) does above.
 #[test]
-fn culled_shadow_faces_keep_the_direct_light_of_the_twin() {
+fn windowed_shadow_faces_keep_the_direct_light_of_the_twin() {
     let (w, h) = (64, 64);
     let scene = builtin::load("atrium").unwrap().unwrap();
     let frame = scene.at(0.0);
     let lights = frame.emitter_samples(1, 8);
     let drawn: usize = lights
         .iter()
-        .map(|s| irad::gpu::shadow::drawn_faces(s).count())
+        .map(|s| irad::gpu::shadow::drawn_faces(s).len())
         .sum();
     let kinds: usize = lights.iter().map(|s| s.faces()).sum();
     assert!(
@@ -190,9 +191,10 @@ fn culled_shadow_faces_keep_the_direct_light_of_the_twin() {
         let mut p = Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
         let out = p.render_frame(0, true).unwrap();
         let name = format!("{backend:?}-atrium").to_lowercase();
-        // Measured 0.0280 on lavapipe and 0.0293 on llvmpipe; 0.141 when the front face, the
-        // one that sees the court, is culled too.
-        let bound = 0.042;
+        // Measured 0.0236 on lavapipe and 0.0249 on llvmpipe (0.0280 and 0.0293 with the
+        // hemicube faces that meet the court); 0.222 with the window's centre read with the
+        // wrong sign in direct.wgsl.
+        let bound = 0.036;
         let rel = compare(
             &format!("{name}-direct"),
             out.image.direct.as_ref().unwrap(),

@@ -72,10 +72,12 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// An emitter sample: position, unit normal and `Le / (pdf * count)`.
+    /// An emitter sample: position, unit normal and `Le / (pdf * count)`, and the window of
+    /// its one shadow face when it has one (`shadow::Window`: centre and scale; zeros if not).
     pub(crate) struct LightSample {
         pub pos: [f32; 4],
         pub normal: [f32; 4],
         pub radiance: [f32; 4],
+        pub window: [f32; 4],
     }
 }

@@ -30,10 +30,13 @@ impl From<&EmitterSample> for LightSample {
             SampleKind::Directional { extent } => (KIND_DIRECTIONAL, extent, 0.0),
             SampleKind::PointCone { tan_half } => (KIND_POINT_CONE, tan_half, 0.0),
         };
+        let window = super::shadow::Window::of(l)
+            .map_or([0.0; 4], |w| [w.centre.x, w.centre.y, w.scale.x, w.scale.y]);
         LightSample {
             pos: l.position.extend(kind).to_array(),
             normal: l.normal.extend(a).to_array(),
             radiance: l.radiance.extend(b).to_array(),
+            window,
         }
     }
 }

@@ -76,16 +76,83 @@ pub fn frustum_meets_box(eye: Vec3, (r, u, f): (Vec3, Vec3, Vec3), (lo, hi): (Ve
         .all(|m| m.dot(c) + m.abs().dot(h) >= -tol * m.length())
 }
 
-/// The faces (index into [`face_bases`], and its axes) that sample `s`'s shadow map draws:
-/// of those its kind needs ([`EmitterSample::faces`]), the ones whose frustum meets the
-/// geometry its light can reach. A receiver's direction always falls in a drawn face.
-pub fn drawn_faces(s: &EmitterSample) -> impl Iterator<Item = (usize, (Vec3, Vec3, Vec3))> + '_ {
+/// One shadow face, along a sample's normal, over just the window of its plane (at unit
+/// distance along the normal, in the `(t, b)` axes of `math::basis`) that the geometry its
+/// light can reach projects into: for an area sample or half a point light whose box lies
+/// wholly in front of it and projects into a window no wider than a hemicube face's
+/// (2 x 2), so its texels are never coarser than the hemicube's. The face's axes are sheared
+/// and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
+/// `shaders/direct.wgsl` reads it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
+    pub centre: glam::Vec2,
+    pub scale: glam::Vec2,
+}
+
+impl Window {
+    pub fn of(s: &EmitterSample) -> Option<Window> {
+        if !matches!(s.kind, SampleKind::Area | SampleKind::PointHalf) {
+            return None;
+        }
+        let (lo, hi) = s.sees;
+        if lo.cmpgt(hi).any() {
+            return None;
+        }
+        let (t, b) = crate::math::basis(s.normal);
+        let n = s.normal;
+        // Every corner well in front of the plane (else the window is unbounded).
+        let near = 1e-3 * (hi - lo).length().max(1e-6);
+        let (mut wlo, mut whi) = (glam::Vec2::INFINITY, glam::Vec2::NEG_INFINITY);
+        for k in 0..8 {
+            let c = Vec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)
+                - s.position;
+            let z = c.dot(n);
+            if z < near {
+                return None;
+            }
+            let w = glam::Vec2::new(c.dot(t), c.dot(b)) / z;
+            (wlo, whi) = (wlo.min(w), whi.max(w));
+        }
+        // 1% wider, so that no receiver falls on its edge.
+        let half = ((whi - wlo) * 0.505).max(glam::Vec2::splat(1e-4));
+        (half.max_element() <= 1.0).then(|| Window {
+            centre: (wlo + whi) * 0.5,
+            scale: 1.0 / half,
+        })
+    }
+
+    /// The face's (right, up, forward): `(t - centre.x n) scale.x`, likewise for up.
+    fn axes(&self, n: Vec3) -> (Vec3, Vec3, Vec3) {
+        let (t, b) = crate::math::basis(n);
+        (
+            (t - self.centre.x * n) * self.scale.x,
+            (b - self.centre.y * n) * self.scale.y,
+            n,
+        )
+    }
+}
+
+/// The faces (layer within the sample's five, and the axes to draw it with) that sample `s`'s
+/// shadow map draws: its [`Window`]'s one face if it has one; else of those its kind needs
+/// ([`EmitterSample::faces`]), the ones whose frustum meets the geometry its light can reach
+/// (a far point light's one face zoomed to its frustum). A receiver's direction always falls
+/// in a drawn face.
+pub fn drawn_faces(s: &EmitterSample) -> Vec<(usize, (Vec3, Vec3, Vec3))> {
+    if let Some(w) = Window::of(s) {
+        return vec![(0, w.axes(s.normal))];
+    }
+    let zoom = match s.kind {
+        SampleKind::PointCone { tan_half } => 1.0 / tan_half,
+        _ => 1.0,
+    };
     let single = s.faces() == 1;
     face_bases(s.normal)
         .into_iter()
         .take(s.faces())
         .enumerate()
-        .filter(move |&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
+        .filter(|&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
+        .map(|(k, (r, u, f))| (k, (r * zoom, u * zoom, f)))
+        .collect()
 }
 
 pub struct ShadowMaps {
@@ -190,13 +257,7 @@ impl ShadowMaps {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
-            // A far point light's one face is zoomed to its frustum by shortening the axes.
-            let zoom = match s.kind {
-                SampleKind::PointCone { tan_half } => 1.0 / tan_half,
-                _ => 1.0,
-            };
             for (k, (r, u, f)) in drawn_faces(s) {
-                let (r, u) = (r * zoom, u * zoom);
                 let face = Face {
                     pos: s.position.extend(1.0).to_array(),
                     right: r.extend(0.0).to_array(),
@@ -269,8 +330,8 @@ mod tests {
     #[test]
     fn every_lit_point_of_the_box_falls_in_a_drawn_face() {
         let mut r = rng(&[31, 7]);
-        let (mut culled, mut points) = (0, 0);
-        for _ in 0..2000 {
+        let (mut culled, mut points, mut windows) = (0, 0, 0);
+        for _ in 0..4000 {
             let (a, b) = (v(&mut r) * 3.0, v(&mut r) * 3.0);
             let sample = EmitterSample {
                 position: v(&mut r) * 4.0,
@@ -280,14 +341,25 @@ mod tests {
                 reach: 0.0,
                 sees: (a.min(b), a.max(b)),
             };
-            let drawn: Vec<usize> = drawn_faces(&sample).map(|(k, _)| k).collect();
+            let drawn: Vec<usize> = drawn_faces(&sample).iter().map(|f| f.0).collect();
+            let window = Window::of(&sample);
             culled += 5 - drawn.len();
+            windows += window.is_some() as usize;
             for _ in 0..50 {
                 let u = Vec3::new(r.random(), r.random(), r.random());
                 let p = a.min(b) + u * (a - b).abs();
                 let l = p - sample.position;
-                if l.dot(sample.normal) > 0.0 {
-                    points += 1;
+                if l.dot(sample.normal) <= 0.0 {
+                    continue;
+                }
+                points += 1;
+                if let Some(w) = window {
+                    // Inside the window, as direct.wgsl maps it to the face's texels.
+                    let (t, bb) = crate::math::basis(sample.normal);
+                    let z = l.dot(sample.normal);
+                    let x = (glam::Vec2::new(l.dot(t), l.dot(bb)) / z - w.centre) * w.scale;
+                    assert!(x.abs().max_element() <= 1.0, "{p} at {x} outside {w:?}");
+                } else {
                     let k = face_read(sample.normal, l);
                     assert!(
                         drawn.contains(&k),
@@ -297,14 +369,12 @@ mod tests {
             }
         }
         // Random boxes miss some faces often enough that the test means something.
-        assert!(
-            culled > 2000 && points > 20_000,
-            "{culled} faces culled, {points} points"
-        );
+        println!("{culled} faces culled, {windows} windows, {points} points");
+        assert!(culled > 4000 && windows > 100 && points > 40_000);
     }
 
     #[test]
-    fn a_sample_high_above_a_box_within_45_degrees_draws_its_front_face_only() {
+    fn a_sample_high_above_a_box_draws_one_face_over_its_window() {
         let s = EmitterSample {
             position: Vec3::new(0.0, 10.0, 0.0),
             normal: Vec3::NEG_Y,
@@ -313,13 +383,33 @@ mod tests {
             reach: 0.0,
             sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 1.0, 8.0)),
         };
-        assert_eq!(drawn_faces(&s).map(|(k, _)| k).collect::<Vec<_>>(), [0]);
-        // A box reaching past 45 degrees along +x needs that side's face too.
+        let faces = drawn_faces(&s);
+        assert_eq!(faces.len(), 1);
+        // The window: x in [-8/9, 8/9], z in [-8/9, 8/9] at unit distance (1% wider).
+        let w = Window::of(&s).unwrap();
+        assert!(w.centre.abs().max_element() < 1e-6, "{w:?}");
+        assert!(
+            (w.scale - glam::Vec2::splat(9.0 / (8.0 * 1.01)))
+                .abs()
+                .max_element()
+                < 1e-4
+        );
+        // The sheared axes map the box's corner (8, 1, 8) just inside the raster's edge.
+        let (r, u, f) = faces[0].1;
+        let q = Vec3::new(8.0, 1.0, 8.0) - s.position;
+        let ndc = glam::Vec2::new(q.dot(r), q.dot(u)).abs() / q.dot(f);
+        assert!(
+            (ndc - glam::Vec2::splat(1.0 / 1.01)).abs().max_element() < 1e-4,
+            "{ndc}"
+        );
+        // A box reaching past 45 degrees along +x projects wider than a hemicube face: the
+        // front face and that side's.
         let wide = EmitterSample {
             sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(11.0, 1.0, 8.0)),
             ..s
         };
-        assert_eq!(drawn_faces(&wide).count(), 2);
+        assert_eq!(Window::of(&wide), None);
+        assert_eq!(drawn_faces(&wide).len(), 2);
         assert!(!frustum_meets_box(
             Vec3::ZERO,
             (Vec3::X, Vec3::Y, Vec3::Z),
