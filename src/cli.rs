@@ -213,6 +213,8 @@ mod tests {
             ("render", "--light-samples", "0", "100000"),
             ("render", "--shadow-size", "4", "100000"),
             ("render", "--aa", "0", "9"),
+            ("render", "--edge-rays", "", "33"),
+            ("render", "--compensate", "", "257"),
             ("compare", "--aa", "0", "9"),
             ("bench", "--aa", "0", "9"),
             ("reference", "--spp", "0", "99999999"),

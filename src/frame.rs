@@ -162,6 +162,33 @@ impl Pipeline {
             image.ldr = image.hdr.to_srgb8(c.exposure);
         }
         lap(&mut stages, "emitter_edges", &mut t);
+        // Clamping-bias compensation (CPU): pixel surfaces, emitter samples, VPLs, clamp ->
+        // the light the clamp left out near creases, added to the pixels (and the indirect).
+        if c.compensate > 0 && self.classical.is_none() {
+            let points =
+                crate::reference::twin::pixel_points(&frame, &self.tracer, c.width, c.height);
+            let light = crate::compensation::Light {
+                samples: &lights,
+                vpls: &selection.shaded,
+                dmin: s.dmin,
+            };
+            let added = crate::compensation::compensate(
+                &frame,
+                &self.tracer,
+                &points,
+                &light,
+                c.compensate,
+                s.seed,
+            );
+            for &(i, l) in &added {
+                image.hdr.data[i] += l;
+                if let Some(ind) = &mut image.indirect {
+                    ind.data[i] += l;
+                }
+            }
+            image.ldr = image.hdr.to_srgb8(c.exposure);
+            lap(&mut stages, "compensation", &mut t);
+        }
         Ok(FrameOutput {
             index: f,
             time: frame.time,

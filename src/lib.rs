@@ -1,10 +1,11 @@
 //! irad: instant radiosity for animation sequences, with temporally coherent virtual point
 //! lights. One folder per stage of a frame: `scene` (1), `trace` (2), `vpl` (3-6), `gpu` (7),
-//! `reference`, `metrics`, `report` (8); `radiosity`: the classical finite-element methods, for
+//! `compensation` (the clamp's bias, after 7), `reference`, `metrics`, `report` (8); `radiosity`: the classical finite-element methods, for
 //! comparison.
 
 pub mod cli;
 pub mod commands;
+pub mod compensation;
 pub mod config;
 pub mod frame;
 pub mod gpu;

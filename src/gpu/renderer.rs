@@ -50,6 +50,8 @@ pub struct RendererConfig {
     pub aa: u32,
     /// Camera rays per side for the pixels at emitters' edges (`trace::edges`; 0: off).
     pub edge_rays: u32,
+    /// Rays a pixel for the clamping-bias compensation (`compensation`; 0: off).
+    pub compensate: u32,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,
