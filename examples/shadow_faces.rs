@@ -1,5 +1,6 @@
-//! How many shadow-hemicube faces a frame's emitter samples draw, with and without culling
-//! the faces that meet no geometry: `cargo run --release --example shadow_faces -- SCENE [T]`.
+//! How many shadow faces a frame's emitter samples draw (of their hemicubes', culled to those
+//! that meet the geometry, or one window) and the share of the hemicubes' texels they fill:
+//! `cargo run --release --example shadow_faces -- SCENE [T]`.
 use irad::gpu::shadow::drawn_faces;
 
 fn main() -> anyhow::Result<()> {
@@ -12,10 +13,14 @@ fn main() -> anyhow::Result<()> {
     let frame = scene.at(t);
     let samples = frame.emitter_samples(1, 32);
     let needed: usize = samples.iter().map(|s| s.faces()).sum();
-    let drawn: usize = samples.iter().map(|s| drawn_faces(s).len()).sum();
+    let faces: Vec<_> = samples.iter().flat_map(|s| drawn_faces(s, 256)).collect();
+    let texels: u64 = faces.iter().map(|f| f.2[0] as u64 * f.2[1] as u64).sum();
     println!(
-        "{name} at t = {t}: {} samples, {needed} faces by kind, {drawn} drawn",
-        samples.len()
+        "{name} at t = {t}: {} samples, {needed} faces by kind, {} drawn, {:.2} of their \
+         texels at 256 x 256",
+        samples.len(),
+        faces.len(),
+        texels as f64 / (needed as f64 * 65536.0)
     );
     Ok(())
 }

@@ -15,11 +15,12 @@ pub const KIND_SPOT: f32 = 2.0;
 pub const KIND_DIRECTIONAL: f32 = 3.0;
 pub const KIND_POINT_CONE: f32 = 4.0;
 
-impl From<&EmitterSample> for LightSample {
+impl LightSample {
     /// Position, normal and radiance, with the kind in `pos.w` and its parameters in
     /// `normal.w` and `radiance.w` (a spot's inner and outer cosines, a directional
-    /// light's map half-extent, a far point light's frustum half-width).
-    fn from(l: &EmitterSample) -> Self {
+    /// light's map half-extent, a far point light's frustum half-width), and its shadow
+    /// map's window on maps of `shadow_size` texels.
+    pub(crate) fn of(l: &EmitterSample, shadow_size: u32) -> Self {
         let (kind, a, b) = match l.kind {
             SampleKind::Area => (KIND_AREA, 0.0, 0.0),
             SampleKind::PointHalf => (KIND_POINT_HALF, 0.0, 0.0),
@@ -30,7 +31,7 @@ impl From<&EmitterSample> for LightSample {
             SampleKind::Directional { extent } => (KIND_DIRECTIONAL, extent, 0.0),
             SampleKind::PointCone { tan_half } => (KIND_POINT_CONE, tan_half, 0.0),
         };
-        let window = super::shadow::Window::of(l)
+        let window = super::shadow::Window::of(l, shadow_size)
             .map_or([0.0; 4], |w| [w.centre.x, w.centre.y, w.scale.x, w.scale.y]);
         LightSample {
             pos: l.position.extend(kind).to_array(),

@@ -552,7 +552,8 @@ impl Renderer {
     /// Uploads the emitter samples unless they are the same as last frame's; returns
     /// whether they were kept.
     fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
-        let lights: Vec<LightSample> = samples.iter().map(LightSample::from).collect();
+        let size = self.config.shadow_size;
+        let lights: Vec<LightSample> = samples.iter().map(|s| LightSample::of(s, size)).collect();
         let kept = self.reuse && same(&self.last.lights, &lights);
         if !lights.is_empty() && !kept {
             self.gpu

@@ -80,17 +80,21 @@ pub fn frustum_meets_box(eye: Vec3, (r, u, f): (Vec3, Vec3, Vec3), (lo, hi): (Ve
 /// distance along the normal, in the `(t, b)` axes of `math::basis`) that the geometry its
 /// light can reach projects into: for an area sample or half a point light whose box lies
 /// wholly in front of it and projects into a window no wider than a hemicube face's
-/// (2 x 2), so its texels are never coarser than the hemicube's. The face's axes are sheared
-/// and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
-/// `shaders/direct.wgsl` reads it.
+/// (2 x 2). It is drawn into a viewport of `texels`, as many as a hemicube face would give
+/// the window (its resolution follows how much of the sample's view the geometry fills, so a
+/// far emitter's map costs less), the window widened to whole texels. The face's axes are
+/// sheared and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
+/// `shaders/direct.wgsl` reads it (and the viewport there is `size / scale`, rounded).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
     pub centre: glam::Vec2,
     pub scale: glam::Vec2,
+    pub texels: glam::UVec2,
 }
 
 impl Window {
-    pub fn of(s: &EmitterSample) -> Option<Window> {
+    /// `s`'s window on a shadow map of `size` x `size` texels, if it has one.
+    pub fn of(s: &EmitterSample, size: u32) -> Option<Window> {
         if !matches!(s.kind, SampleKind::Area | SampleKind::PointHalf) {
             return None;
         }
@@ -115,9 +119,18 @@ impl Window {
         }
         // 1% wider, so that no receiver falls on its edge.
         let half = ((whi - wlo) * 0.505).max(glam::Vec2::splat(1e-4));
-        (half.max_element() <= 1.0).then(|| Window {
+        if half.max_element() > 1.0 {
+            return None;
+        }
+        // A hemicube face's texels span 2 / size at unit distance: as many over the window.
+        let texels = (half * size as f32)
+            .ceil()
+            .as_uvec2()
+            .clamp(glam::UVec2::ONE, glam::UVec2::splat(size));
+        Some(Window {
             centre: (wlo + whi) * 0.5,
-            scale: 1.0 / half,
+            scale: size as f32 / texels.as_vec2(),
+            texels,
         })
     }
 
@@ -132,14 +145,17 @@ impl Window {
     }
 }
 
-/// The faces (layer within the sample's five, and the axes to draw it with) that sample `s`'s
-/// shadow map draws: its [`Window`]'s one face if it has one; else of those its kind needs
-/// ([`EmitterSample::faces`]), the ones whose frustum meets the geometry its light can reach
-/// (a far point light's one face zoomed to its frustum). A receiver's direction always falls
-/// in a drawn face.
-pub fn drawn_faces(s: &EmitterSample) -> Vec<(usize, (Vec3, Vec3, Vec3))> {
-    if let Some(w) = Window::of(s) {
-        return vec![(0, w.axes(s.normal))];
+/// One face a shadow map draws: its layer within the sample's five, the axes to draw it with
+/// and the viewport (width, height) it is drawn into.
+pub type DrawnFace = (usize, (Vec3, Vec3, Vec3), [u32; 2]);
+
+/// The faces that sample `s`'s shadow map of `size` x `size` texels draws: its [`Window`]'s one
+/// face if it has one; else of those its kind needs ([`EmitterSample::faces`]), the ones whose
+/// frustum meets the geometry its light can reach (a far point light's one face zoomed to its
+/// frustum). A receiver's direction always falls in a drawn face.
+pub fn drawn_faces(s: &EmitterSample, size: u32) -> Vec<DrawnFace> {
+    if let Some(w) = Window::of(s, size) {
+        return vec![(0, w.axes(s.normal), w.texels.to_array())];
     }
     let zoom = match s.kind {
         SampleKind::PointCone { tan_half } => 1.0 / tan_half,
@@ -151,7 +167,7 @@ pub fn drawn_faces(s: &EmitterSample) -> Vec<(usize, (Vec3, Vec3, Vec3))> {
         .take(s.faces())
         .enumerate()
         .filter(|&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
-        .map(|(k, (r, u, f))| (k, (r * zoom, u * zoom, f)))
+        .map(|(k, (r, u, f))| (k, (r * zoom, u * zoom, f), [size; 2]))
         .collect()
 }
 
@@ -257,7 +273,7 @@ impl ShadowMaps {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
-            for (k, (r, u, f)) in drawn_faces(s) {
+            for (k, (r, u, f), viewport) in drawn_faces(s, self.size) {
                 let face = Face {
                     pos: s.position.extend(1.0).to_array(),
                     right: r.extend(0.0).to_array(),
@@ -271,22 +287,20 @@ impl ShadowMaps {
                 let o = (j * 5 + k) * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Face>()]
                     .copy_from_slice(bytemuck::bytes_of(&face));
-                layers.push(j * 5 + k);
+                layers.push((j * 5 + k, viewport));
             }
         }
         if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
             return false;
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
-        for l in layers {
-            gbuffer::raster(
+        for (l, [w, h]) in layers {
+            gbuffer::raster_tiles(
                 enc,
                 "shadow face",
-                &self.pipeline,
-                &self.bind_group,
-                &[(l as u64 * self.stride) as u32],
-                &self.layers[l],
-                &self.depth,
+                (&self.pipeline, &self.bind_group),
+                &[((l as u64 * self.stride) as u32, [0, 0, w, h])],
+                (&self.layers[l], &self.depth),
                 vertices,
                 count,
             );
@@ -341,8 +355,8 @@ mod tests {
                 reach: 0.0,
                 sees: (a.min(b), a.max(b)),
             };
-            let drawn: Vec<usize> = drawn_faces(&sample).iter().map(|f| f.0).collect();
-            let window = Window::of(&sample);
+            let drawn: Vec<usize> = drawn_faces(&sample, 256).iter().map(|f| f.0).collect();
+            let window = Window::of(&sample, 256);
             culled += 5 - drawn.len();
             windows += window.is_some() as usize;
             for _ in 0..50 {
@@ -383,23 +397,28 @@ mod tests {
             reach: 0.0,
             sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 1.0, 8.0)),
         };
-        let faces = drawn_faces(&s);
+        let faces = drawn_faces(&s, 256);
         assert_eq!(faces.len(), 1);
-        // The window: x in [-8/9, 8/9], z in [-8/9, 8/9] at unit distance (1% wider).
-        let w = Window::of(&s).unwrap();
+        // The window: x and z in [-8/9, 8/9] at unit distance, 1% wider: half-width 0.8978,
+        // 229.8 of a 256-texel hemicube face's texels, so a viewport of 230 and the window
+        // widened to 230 / 256.
+        let w = Window::of(&s, 256).unwrap();
         assert!(w.centre.abs().max_element() < 1e-6, "{w:?}");
+        assert_eq!(w.texels, glam::UVec2::splat(230));
+        assert_eq!(faces[0].2, [230, 230]);
         assert!(
-            (w.scale - glam::Vec2::splat(9.0 / (8.0 * 1.01)))
+            (w.scale - glam::Vec2::splat(256.0 / 230.0))
                 .abs()
                 .max_element()
-                < 1e-4
+                < 1e-5
         );
         // The sheared axes map the box's corner (8, 1, 8) just inside the raster's edge.
         let (r, u, f) = faces[0].1;
         let q = Vec3::new(8.0, 1.0, 8.0) - s.position;
         let ndc = glam::Vec2::new(q.dot(r), q.dot(u)).abs() / q.dot(f);
+        let expected = 8.0 / 9.0 * 256.0 / 230.0;
         assert!(
-            (ndc - glam::Vec2::splat(1.0 / 1.01)).abs().max_element() < 1e-4,
+            (ndc - glam::Vec2::splat(expected)).abs().max_element() < 1e-5,
             "{ndc}"
         );
         // A box reaching past 45 degrees along +x projects wider than a hemicube face: the
@@ -408,8 +427,8 @@ mod tests {
             sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(11.0, 1.0, 8.0)),
             ..s
         };
-        assert_eq!(Window::of(&wide), None);
-        assert_eq!(drawn_faces(&wide).len(), 2);
+        assert_eq!(Window::of(&wide, 256), None);
+        assert_eq!(drawn_faces(&wide, 256).len(), 2);
         assert!(!frustum_meets_box(
             Vec3::ZERO,
             (Vec3::X, Vec3::Y, Vec3::Z),
