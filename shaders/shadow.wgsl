@@ -27,8 +27,7 @@ struct VsOut {
     @location(1) @interpolate(flat) tri: u32,
 }
 
-@vertex
-fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
+fn project(pos: vec3f, tri: u32) -> VsOut {
     let q = pos - F.pos.xyz;
     let vx = dot(q, F.right.xyz);
     let vy = dot(q, F.up.xyz);
@@ -44,12 +43,33 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
     return o;
 }
 
+@vertex
+fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
+    return project(pos, tri);
+}
+
+// Scenes without cut-outs: the triangles' corners shared through an index buffer (a corner
+// is shaded once for all the triangles that meet there), no triangle index.
+@vertex
+fn vs_shared(@location(0) pos: vec3f) -> VsOut {
+    return project(pos, 0u);
+}
+
+fn distance_bits(i: VsOut) -> vec4u {
+    let d = select(length(i.q), dot(i.q, F.fwd.xyz), F.ortho > 0.0);
+    return vec4u(bitcast<u32>(d), 0u, 0u, 0u);
+}
+
+@fragment
+fn fs_shared(i: VsOut) -> @location(0) vec4u {
+    return distance_bits(i);
+}
+
 // Integer target (renderable everywhere): the distance's bits; 0 means nothing there.
 @fragment
 fn fs(i: VsOut) -> @location(0) vec4u {
     if cut.on != 0u && cut_away(i.tri, i.q + F.pos.xyz) {
         discard;
     }
-    let d = select(length(i.q), dot(i.q, F.fwd.xyz), F.ortho > 0.0);
-    return vec4u(bitcast<u32>(d), 0u, 0u, 0u);
+    return distance_bits(i);
 }

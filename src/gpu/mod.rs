@@ -344,6 +344,19 @@ impl Gpu {
         target: wgpu::TextureFormat,
         vertices: wgpu::VertexBufferLayout,
     ) -> wgpu::RenderPipeline {
+        self.raster_pipeline_with(label, module, layout, target, vertices, ("vs", "fs"))
+    }
+
+    /// [`Gpu::raster_pipeline_over`] with other entry points (vertex, fragment).
+    pub(crate) fn raster_pipeline_with(
+        &self,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        layout: &wgpu::BindGroupLayout,
+        target: wgpu::TextureFormat,
+        vertices: wgpu::VertexBufferLayout,
+        (vs, fs): (&str, &str),
+    ) -> wgpu::RenderPipeline {
         let pl = self
             .device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -357,7 +370,7 @@ impl Gpu {
                 layout: Some(&pl),
                 vertex: wgpu::VertexState {
                     module,
-                    entry_point: Some("vs"),
+                    entry_point: Some(vs),
                     compilation_options: Default::default(),
                     buffers: &[Some(vertices)],
                 },
@@ -375,7 +388,7 @@ impl Gpu {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module,
-                    entry_point: Some("fs"),
+                    entry_point: Some(fs),
                     compilation_options: Default::default(),
                     targets: &[Some(target.into())],
                 }),

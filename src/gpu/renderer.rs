@@ -330,7 +330,13 @@ impl Renderer {
             &tris,
             (&gbuffer.view, &surface_buf),
         );
-        let shadows = ShadowMaps::new(&gpu, c.shadow_size, c.light_samples, &texture_data, &tris);
+        let shadows = ShadowMaps::new(
+            &gpu,
+            (c.shadow_size, c.light_samples),
+            (tri_count as u32, points_frame.has_cutouts()),
+            &texture_data,
+            &tris,
+        );
         let direct = Direct::new(
             &gpu,
             &params,
@@ -507,6 +513,7 @@ impl Renderer {
                 })
                 .collect();
             q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
+            self.shadows.upload(&self.gpu, &f.tris);
             self.last.tris = tris;
         }
         still

@@ -183,19 +183,83 @@ pub struct ShadowMaps {
     stride: u64,
     /// The faces last drawn.
     last: Option<Vec<u8>>,
+    /// Scenes without cut-outs draw shared corners through an index buffer.
+    shared: Option<Shared>,
+}
+
+/// The scene's triangles with their corners shared: each distinct position once, and three
+/// indices a triangle (built anew whenever the geometry moves).
+struct Shared {
+    pipeline: wgpu::RenderPipeline,
+    positions: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    count: u32,
+}
+
+/// The distinct corner positions of `tris` (as `[x, y, z]`) and three indices into them a
+/// triangle: corners at the same position, bit for bit, are one.
+pub fn shared_corners(tris: &[[Vec3; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut index: std::collections::HashMap<[u32; 3], u32> = Default::default();
+    let mut positions = Vec::new();
+    let indices = tris
+        .iter()
+        .flatten()
+        .map(|p| {
+            *index
+                .entry(p.to_array().map(f32::to_bits))
+                .or_insert_with(|| {
+                    positions.push(p.to_array());
+                    positions.len() as u32 - 1
+                })
+        })
+        .collect();
+    (positions, indices)
 }
 
 impl ShadowMaps {
+    /// Maps of `size` texels for `samples` emitter samples over a scene of `triangles`
+    /// triangles (`cutouts`: whether an alpha MASK cuts any, which needs each fragment's
+    /// triangle).
     pub fn new(
         gpu: &Gpu,
-        size: u32,
-        samples: u32,
+        (size, samples): (u32, u32),
+        (triangles, cutouts): (u32, bool),
         textures: &super::surface::TextureData,
         tris: &wgpu::Buffer,
     ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
         let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
+        let shared = (!cutouts).then(|| {
+            let attributes = wgpu::vertex_attr_array![0 => Float32x3];
+            let vertices = wgpu::VertexBufferLayout {
+                array_stride: 12,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &attributes,
+            };
+            let corners = 3 * triangles.max(1) as u64;
+            Shared {
+                pipeline: gpu.raster_pipeline_with(
+                    PASS.name,
+                    &module,
+                    &layout,
+                    FORMAT,
+                    vertices,
+                    ("vs_shared", "fs_shared"),
+                ),
+                positions: gpu.buffer(
+                    "shadow corners",
+                    12 * corners,
+                    wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                ),
+                indices: gpu.buffer(
+                    "shadow corner indices",
+                    4 * corners,
+                    wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                ),
+                count: 0,
+            }
+        });
         let n = (samples * 5).max(1);
         let stride = (std::mem::size_of::<Face>() as u64)
             .next_multiple_of(gpu.limits.min_uniform_buffer_offset_alignment as u64);
@@ -247,6 +311,19 @@ impl ShadowMaps {
             size,
             stride,
             last: None,
+            shared,
+        }
+    }
+
+    /// Uploads the frame's shared corners (after its geometry moved, or first).
+    pub fn upload(&mut self, gpu: &Gpu, tris: &[[Vec3; 3]]) {
+        if let Some(s) = &mut self.shared {
+            let (positions, indices) = shared_corners(tris);
+            gpu.queue
+                .write_buffer(&s.positions, 0, bytemuck::cast_slice(&positions));
+            gpu.queue
+                .write_buffer(&s.indices, 0, bytemuck::cast_slice(&indices));
+            s.count = indices.len() as u32;
         }
     }
 
@@ -295,15 +372,29 @@ impl ShadowMaps {
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
         for (l, [w, h]) in layers {
-            gbuffer::raster_tiles(
-                enc,
-                "shadow face",
-                (&self.pipeline, &self.bind_group),
-                &[((l as u64 * self.stride) as u32, [0, 0, w, h])],
-                (&self.layers[l], &self.depth),
-                vertices,
-                count,
-            );
+            let tile = [((l as u64 * self.stride) as u32, [0, 0, w, h])];
+            let target = (&self.layers[l], &self.depth);
+            match &self.shared {
+                Some(s) => {
+                    let mut pass = gbuffer::begin(enc, "shadow face", target.0, target.1);
+                    pass.set_pipeline(&s.pipeline);
+                    pass.set_bind_group(0, &self.bind_group, &[tile[0].0]);
+                    pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
+                    pass.set_scissor_rect(0, 0, w, h);
+                    pass.set_vertex_buffer(0, s.positions.slice(..));
+                    pass.set_index_buffer(s.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..s.count, 0, 0..1);
+                }
+                None => gbuffer::raster_tiles(
+                    enc,
+                    "shadow face",
+                    (&self.pipeline, &self.bind_group),
+                    &tile,
+                    target,
+                    vertices,
+                    count,
+                ),
+            }
         }
         self.last = Some(bytes);
         true
@@ -339,6 +430,22 @@ mod tests {
 
     fn v(r: &mut impl Rng) -> Vec3 {
         Vec3::new(r.random(), r.random(), r.random()) * 2.0 - 1.0
+    }
+
+    #[test]
+    fn shared_corners_rebuild_every_triangle_and_share_the_boxs_corners() {
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let (positions, indices) = shared_corners(&f.tris);
+        assert_eq!(indices.len(), 3 * f.tris.len());
+        for (t, ix) in f.tris.iter().zip(indices.chunks(3)) {
+            for (p, &i) in t.iter().zip(ix) {
+                assert_eq!(Vec3::from(positions[i as usize]), *p);
+            }
+        }
+        // 36 triangles: 108 corners at 28 distinct positions (the room's 8, the two boxes'
+        // 16, the light's 4): each shaded once a face instead of 3.9 times.
+        assert_eq!(positions.len(), 28);
     }
 
     #[test]
