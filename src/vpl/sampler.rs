@@ -29,7 +29,7 @@
 //!   probabilities now over then), and a fraction `smc_rate` of the slots, chosen at random,
 //!   take newborn particles. Lagging behind a moving target costs it variance, not bias.
 //!
-//! For cdf and mh, I includes the defensive floor `eps * mean(I over the candidates)`.
+//! For cdf, mh and smc, I includes the defensive floor `eps * mean(I over the candidates)`.
 
 mod cdf;
 mod common;
