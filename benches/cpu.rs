@@ -76,6 +76,8 @@ fn bench(c: &mut Criterion) {
         mh_rate: 1.0,
         mh_follow: 0.0,
         mh_escape: 0,
+        smc_rate: 0.05,
+        smc_follow: 0.0,
         dmin: 0.07,
         seed: 1,
         width: 256,

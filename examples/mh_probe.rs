@@ -37,6 +37,8 @@ fn params(
         mh_rate: rate,
         mh_follow: 0.0,
         mh_escape: 8,
+        smc_rate: 0.05,
+        smc_follow: 0.0,
         dmin,
         seed,
         width: size,

@@ -158,6 +158,8 @@ mod tests {
         assert_eq!(r.quality.ism_size, d.quality.ism_size);
         assert_eq!(r.quality.aa, d.quality.aa);
         assert_eq!(r.sampler.mh_escape, d.sampler.mh_escape);
+        assert_eq!(r.sampler.smc_rate, d.sampler.smc_rate);
+        assert_eq!(r.sampler.smc_follow, d.sampler.smc_follow);
         assert_eq!(r.out, d.out);
         let Command::Compare(c) = parse(&["compare"]).unwrap() else {
             panic!()
@@ -180,6 +182,8 @@ mod tests {
             ("render", "--clamp"),
             ("render", "--eps"),
             ("render", "--mh-rate"),
+            ("render", "--smc-rate"),
+            ("render", "--smc-follow"),
             ("render", "--ism-bias"),
             ("render", "--exposure"),
             ("reference", "--fps"),
@@ -188,11 +192,14 @@ mod tests {
             ("compare", "--clamp"),
             ("compare", "--eps"),
             ("compare", "--mh-rate"),
+            ("compare", "--smc-rate"),
+            ("compare", "--smc-follow"),
             ("compare", "--ism-bias"),
             ("compare", "--exposure"),
             ("bench", "--fps"),
             ("bench", "--exposure"),
             ("bench", "--mh-rate"),
+            ("bench", "--smc-rate"),
             ("bench", "--ism-bias"),
         ];
         for (cmd, flag) in floats {

@@ -378,6 +378,16 @@ pub struct SamplerConfig {
     /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
     #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
     pub mh_escape: u32,
+    /// SMC: probability that a slot takes a newborn particle in a frame (1: every frame, as
+    /// cdf; lower keeps VPLs longer). The rate rises with how far the kept weights are off, see
+    /// --smc-follow
+    #[arg(long, default_value_t = SamplerConfig::default().smc_rate, allow_hyphen_values = true)]
+    pub smc_rate: f32,
+    /// SMC: how fast the renewal rate follows the kept weights: rate = min(1, smc-rate +
+    /// smc-follow * D), D the spread of the kept particles' importance now over at birth (0: a
+    /// fixed rate)
+    #[arg(long, default_value_t = SamplerConfig::default().smc_follow, allow_hyphen_values = true)]
+    pub smc_follow: f32,
 }
 
 impl Default for SamplerConfig {
@@ -393,6 +403,8 @@ impl Default for SamplerConfig {
             mh_rate: 0.05,
             mh_follow: 10.0,
             mh_escape: 8,
+            smc_rate: 0.05,
+            smc_follow: 0.0,
         }
     }
 }
@@ -413,7 +425,9 @@ impl SamplerConfig {
         check::float("--eps", self.eps, 0.0, false, 1000.0)?;
         check::float("--mh-rate", self.mh_rate, 0.0, true, 1.0)?;
         check::float("--mh-follow", self.mh_follow, 0.0, false, 1000.0)?;
-        check::int("--mh-escape", self.mh_escape, 0, 1000)
+        check::int("--mh-escape", self.mh_escape, 0, 1000)?;
+        check::float("--smc-rate", self.smc_rate, 0.0, true, 1.0)?;
+        check::float("--smc-follow", self.smc_follow, 0.0, false, 1000.0)
     }
     /// M for `vpls` slots.
     pub fn candidates(&self, vpls: u32) -> u32 {
@@ -691,6 +705,8 @@ impl Render {
             mh_rate: s.mh_rate,
             mh_follow: s.mh_follow,
             mh_escape: s.mh_escape,
+            smc_rate: s.smc_rate,
+            smc_follow: s.smc_follow,
             dmin: self.dmin(scene),
             seed: self.sequence.seed,
             width: self.sequence.size.width,
@@ -766,8 +782,8 @@ pub struct Compare {
     /// The VPL count whose animations the report shows [default: the middle one]
     #[arg(long, allow_hyphen_values = true)]
     pub show_vpls: Option<u32>,
-    /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-follow, mh-escape, eps,
-    /// candidates, camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
+    /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-follow, mh-escape,
+    /// smc-rate, smc-follow, eps, candidates, camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
     /// more. The swept sampler runs once per value and VPL count, drawn as one curve on the
     /// flicker-against-error charts; other samplers draw a curve over --vpls
     #[arg(long, value_name = "SAMPLER:KNOB=V1,V2,..")]
@@ -785,16 +801,20 @@ pub enum Knob {
     MhRate,
     MhFollow,
     MhEscape,
+    SmcRate,
+    SmcFollow,
     Eps,
     Candidates,
     CameraPoints,
 }
 
 impl Knob {
-    pub const ALL: [Knob; 6] = [
+    pub const ALL: [Knob; 8] = [
         Knob::MhRate,
         Knob::MhFollow,
         Knob::MhEscape,
+        Knob::SmcRate,
+        Knob::SmcFollow,
         Knob::Eps,
         Knob::Candidates,
         Knob::CameraPoints,
@@ -806,6 +826,8 @@ impl Knob {
             Knob::MhRate => "mh-rate",
             Knob::MhFollow => "mh-follow",
             Knob::MhEscape => "mh-escape",
+            Knob::SmcRate => "smc-rate",
+            Knob::SmcFollow => "smc-follow",
             Knob::Eps => "eps",
             Knob::Candidates => "candidates",
             Knob::CameraPoints => "camera-points",
@@ -822,8 +844,9 @@ impl Knob {
         use SamplerKind::*;
         match self {
             Knob::MhRate | Knob::MhFollow | Knob::MhEscape => s == Mh,
-            Knob::Candidates => matches!(s, Cdf | Mh),
-            Knob::Eps | Knob::CameraPoints => matches!(s, Cdf | Mh | Rejection),
+            Knob::SmcRate | Knob::SmcFollow => s == Smc,
+            Knob::Candidates => matches!(s, Cdf | Mh | Smc),
+            Knob::Eps | Knob::CameraPoints => matches!(s, Cdf | Mh | Rejection | Smc),
         }
     }
 
@@ -833,6 +856,8 @@ impl Knob {
             Knob::MhRate => c.mh_rate = v as f32,
             Knob::MhFollow => c.mh_follow = v as f32,
             Knob::MhEscape => c.mh_escape = v as u32,
+            Knob::SmcRate => c.smc_rate = v as f32,
+            Knob::SmcFollow => c.smc_follow = v as f32,
             Knob::Eps => c.eps = v as f32,
             Knob::Candidates => c.candidates = Some(v as u32),
             Knob::CameraPoints => c.camera_points = v as u32,
@@ -938,6 +963,12 @@ pub struct CompareRender {
     /// MH: extra proposals for a chain whose VPL no camera point sees
     #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
     pub mh_escape: u32,
+    /// SMC: probability that a slot takes a newborn particle in a frame
+    #[arg(long, default_value_t = SamplerConfig::default().smc_rate, allow_hyphen_values = true)]
+    pub smc_rate: f32,
+    /// SMC: how fast the renewal rate follows the kept weights (see `irad render --help`)
+    #[arg(long, default_value_t = SamplerConfig::default().smc_follow, allow_hyphen_values = true)]
+    pub smc_follow: f32,
     /// K: camera points for importance
     #[arg(long, default_value_t = SamplerConfig::default().camera_points, allow_hyphen_values = true)]
     pub camera_points: u32,
@@ -962,6 +993,8 @@ impl Default for CompareRender {
             mh_rate: r.sampler.mh_rate,
             mh_follow: r.sampler.mh_follow,
             mh_escape: r.sampler.mh_escape,
+            smc_rate: r.sampler.smc_rate,
+            smc_follow: r.sampler.smc_follow,
             camera_points: r.sampler.camera_points,
             eps: r.sampler.eps,
             quality: r.quality,
@@ -1014,6 +1047,8 @@ impl Compare {
                 mh_rate: r.mh_rate,
                 mh_follow: r.mh_follow,
                 mh_escape: r.mh_escape,
+                smc_rate: r.smc_rate,
+                smc_follow: r.smc_follow,
             },
             quality: r.quality.clone(),
             backend: r.backend,

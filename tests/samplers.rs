@@ -1,13 +1,14 @@
-//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection`
-//! and `mh` must average to what `uniform` averages to, `mh` must keep most of its VPLs from
-//! frame to frame, and `frozen` must keep its light paths.
+//! The samplers' estimators on a fixed frame (CPU twin, exact visibility): `cdf`, `rejection`,
+//! `mh` and `smc` must average to what `uniform` averages to (`smc` also under a moving light),
+//! `mh` must keep most of its VPLs from frame to frame, `frozen` must keep its light paths, and
+//! `smc` its particles, bit for bit where nothing moves.
 
 use glam::Vec3;
 use irad::math::luminance;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
-use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams};
+use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams, PATHS_PER_FRAME};
 
 const W: u32 = 12;
 const H: u32 = 12;
@@ -23,6 +24,8 @@ fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
         mh_rate: 1.0,
         mh_follow: 0.0,
         mh_escape: 0,
+        smc_rate: 0.05,
+        smc_follow: 0.0,
         dmin: DMIN,
         seed,
         width: W,
@@ -134,6 +137,18 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         ),
         20,
     );
+    // Particles that live ten frames on average, and that follow a target.
+    let smc = stats(
+        &run_with(
+            SamplerParams {
+                smc_rate: 0.1,
+                ..params(SamplerKind::Smc, 14)
+            },
+            2020,
+            20,
+        ),
+        20,
+    );
     for k in 0..4 {
         for (name, e) in [
             ("cdf", &cdf),
@@ -141,6 +156,7 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
             ("mh", &mh),
             ("mh escape 8", &escape),
             ("mh rate 0.1", &lazy),
+            ("smc rate 0.1", &smc),
         ] {
             let z = (e.mean[k] - uniform.mean[k]).abs()
                 / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
@@ -291,6 +307,7 @@ fn same_seed_same_vpls_other_seed_other_vpls() {
         SamplerKind::Mh,
         SamplerKind::Frozen,
         SamplerKind::Rejection,
+        SamplerKind::Smc,
     ] {
         let mut a = Sampler::new(params(kind, 5));
         let mut b = Sampler::new(params(kind, 5));
@@ -353,4 +370,148 @@ fn frozen_keeps_its_paths() {
         "moved {moved} of {}",
         common.len()
     );
+}
+
+/// `smc` in a still scene: a slot either keeps its particle, and then its VPL and weight are
+/// bitwise the last frame's, or renews, about `smc_rate` of the slots a frame; and with `smc_follow` the rate stays exactly at its base
+/// (the kept importance does not move), while under a moving camera it rises.
+#[test]
+fn smc_keeps_its_particles_bit_for_bit_where_nothing_moves() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let p = SamplerParams {
+        smc_rate: 0.1,
+        smc_follow: 10.0,
+        ..params(SamplerKind::Smc, 31)
+    };
+    let mut smc = Sampler::new(p.clone());
+    let mut last = smc.select(&frame, &tracer, 0);
+    let (mut kept, mut slots, mut replaced) = (0usize, 0usize, 0.0f64);
+    let frames = 60;
+    for f in 1..frames {
+        let s = smc.select(&frame, &tracer, f);
+        assert_eq!(
+            s.mh_rate,
+            Some(0.1),
+            "frame {f}: nothing moved, the base rate"
+        );
+        assert_eq!(s.vpls.len(), p.slots);
+        for ((v, w), (v0, w0)) in s
+            .vpls
+            .iter()
+            .zip(&s.shaded)
+            .zip(last.vpls.iter().zip(&last.shaded))
+        {
+            if (v.path, v.depth) == (v0.path, v0.depth) {
+                assert_eq!(v, v0, "frame {f}");
+                assert_eq!(
+                    [w.position, w.normal, w.flux].map(|c| c.to_array().map(f32::to_bits)),
+                    [w0.position, w0.normal, w0.flux].map(|c| c.to_array().map(f32::to_bits)),
+                    "frame {f}"
+                );
+                kept += 1;
+            }
+            slots += 1;
+        }
+        replaced += s.replaced as f64;
+        last = s;
+    }
+    let replaced = replaced / (frames - 1) as f64;
+    // Binomial: 59 frames x 32 slots at 0.1 gives a standard error of 0.0070.
+    println!("smc replaced {replaced:.4} a frame at rate 0.1 ({kept} of {slots} kept)");
+    assert!((replaced - 0.1).abs() < 0.028, "replaced {replaced}");
+    // A moving camera moves the kept particles' importance: the rate rises.
+    let orbit = builtin::load("cornell-orbit").unwrap().unwrap();
+    let mut smc = Sampler::new(p);
+    let rates: Vec<f32> = (0..6)
+        .map(|f| {
+            let fr = orbit.at(f as f32 / 4.0);
+            smc.select(&fr, &Tracer::new(&fr), f).mh_rate.unwrap()
+        })
+        .collect();
+    println!("smc rates under a moving camera: {rates:?}");
+    assert!(rates[1..].iter().all(|&r| r > 0.15), "rates {rates:?}");
+}
+
+/// `smc` under a moving light: particles (paths) drawn while the light was at one end of the
+/// ceiling, re-traced in each frame as it slides, give on average the light that uniform's
+/// fresh paths give in the last frame,
+/// per image quadrant, over independent seeds. Slow renewal (rate 0.05, no follow) so that
+/// most particles are old.
+#[test]
+fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
+    let scene = builtin::load("cornell-light").unwrap().unwrap();
+    let steps = 12u64;
+    let time = |f: u64| f as f32 * 0.125;
+    let last = scene.at(time(steps));
+    let last_tracer = Tracer::new(&last);
+    let points = twin::pixel_points(&last, &last_tracer, W, H);
+    let image = |sel: &irad::vpl::sampler::Selection| {
+        quadrants(&twin::gather(
+            &last,
+            &last_tracer,
+            &points,
+            W,
+            H,
+            &sel.shaded,
+            DMIN,
+        ))
+    };
+    let seeds = 800u64;
+    let (mut smc, mut uniform) = (Vec::new(), Vec::new());
+    let mut old = 0usize;
+    for seed in 0..seeds {
+        let mut s = Sampler::new(SamplerParams {
+            smc_rate: 0.05,
+            ..params(SamplerKind::Smc, 1000 + seed)
+        });
+        for f in 0..steps {
+            let fr = scene.at(time(f));
+            s.select(&fr, &Tracer::new(&fr), f);
+        }
+        let sel = s.select(&last, &last_tracer, steps);
+        old += sel.vpls.iter().filter(|v| v.path < PATHS_PER_FRAME).count();
+        smc.push(image(&sel));
+        let mut u = Sampler::new(SamplerParams {
+            slots: 256,
+            ..params(SamplerKind::Uniform, 1000 + seed)
+        });
+        uniform.push(image(&u.select(&last, &last_tracer, steps)));
+    }
+    let (smc_raw, uniform_raw) = (smc, uniform);
+    let (smc, uniform) = (
+        stats(&smc_raw, seeds as usize),
+        stats(&uniform_raw, seeds as usize),
+    );
+    let old = old as f64 / (seeds as f64 * 32.0);
+    println!("particles born in frame 0: {old:.3}");
+    assert!(old > 0.4, "most particles are old: {old}");
+    for k in 0..4 {
+        let z = (smc.mean[k] - uniform.mean[k]).abs()
+            / (smc.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
+        println!(
+            "quadrant {k}: smc {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
+            smc.mean[k], smc.se[k], uniform.mean[k], uniform.se[k]
+        );
+        assert!(
+            z < 4.0,
+            "quadrant {k}: smc {} vs uniform {} (z = {z})",
+            smc.mean[k],
+            uniform.mean[k]
+        );
+    }
+    // The whole image: the power to see a 7% error (what particles of one vertex each, drawn
+    // in frame 0, lost by frame 12: their paths' later vertices that did not exist in frame 0).
+    let whole = |x: &[[f64; 4]]| {
+        let v: Vec<f64> = x.iter().map(|q| q.iter().sum::<f64>() / 4.0).collect();
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        let var = v.iter().map(|y| (y - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+        (m, (var / v.len() as f64).sqrt())
+    };
+    let ((ms, ss), (mu, su)) = (whole(&smc_raw), whole(&uniform_raw));
+    let z = (ms - mu).abs() / (ss * ss + su * su).sqrt();
+    println!("image: smc {ms:.5} +- {ss:.5}, uniform {mu:.5} +- {su:.5}, z = {z:.2}");
+    assert!(z < 4.0, "image: smc {ms} vs uniform {mu} (z = {z})");
+    assert!(0.07 * mu > 4.0 * (ss * ss + su * su).sqrt());
 }

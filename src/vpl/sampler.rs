@@ -23,16 +23,23 @@
 //! - `rejection`: Georgiev and Slusallek's (2010) importance by rejection: fresh paths as for
 //!   `uniform`, each VPL kept with probability `p = min(1, I / I_target + eps)` and weighted
 //!   `1 / (p P)`, no normalization constant (`I_target`: mean I of a pilot set of paths).
+//! - `smc`: sequential Monte Carlo (after Hedman et al. 2016): one particle per slot, drawn as
+//!   cdf draws it and kept with the weight of that draw; each frame every particle re-traces
+//!   its own path in the new scene (through its Russian-roulette coins, weighted by their
+//!   probabilities now over then), and a fraction `smc_rate` of the slots, chosen at random,
+//!   take newborn particles. Lagging behind a moving target costs it variance, not bias.
 //!
-//! For cdf and mh, I includes the defensive floor `eps * mean(I over the candidates)`.
+//! For cdf, mh and smc, I includes the defensive floor `eps * mean(I over the candidates)`.
 
 mod cdf;
 mod common;
 mod mh;
 mod rejection;
+mod smc;
 mod uniform;
 
 pub use common::{cdf_draw, mh_accept, PATHS_PER_FRAME};
+pub use smc::spread as smc_spread;
 
 use super::{ShadedVpl, Vpl};
 use crate::scene::Frame;
@@ -55,6 +62,9 @@ pub enum SamplerKind {
     /// Importance by rejection (Georgiev and Slusallek 2010): keep a fresh VPL with
     /// probability min(1, I / I_target + eps), weight 1 / p
     Rejection,
+    /// Sequential Monte Carlo: particles drawn as cdf draws them keep their paths (re-traced
+    /// in each frame's scene) and their weights; --smc-rate of the slots renew a frame
+    Smc,
 }
 
 /// The sampler's parameters.
@@ -77,6 +87,12 @@ pub struct SamplerParams {
     pub mh_follow: f32,
     /// MH: extra proposals a frame for a chain whose VPL no camera point sees.
     pub mh_escape: u32,
+    /// SMC: probability that a slot takes a newborn particle in a frame where the kept weights
+    /// are not off.
+    pub smc_rate: f32,
+    /// SMC: how much the renewal rate rises with the spread of the kept particles' importance
+    /// ratios (rate = min(1, smc_rate + smc_follow * D)).
+    pub smc_follow: f32,
     pub dmin: f32,
     pub seed: u64,
     /// The image the camera points stratify.
@@ -96,7 +112,7 @@ pub struct Selection {
     /// MH: fraction of this frame's proposals accepted.
     pub acceptance: Option<f32>,
     /// MH: the probability that a chain proposed this frame (the base rate raised by how far
-    /// the target moved).
+    /// the target moved); SMC: the probability that a slot renewed (the mean of its halves').
     pub mh_rate: Option<f32>,
     /// Mean floored importance over the candidates.
     pub b: Option<f32>,
@@ -127,6 +143,7 @@ impl Sampler {
             SamplerKind::Mh => Box::new(mh::Mh::new(&params)),
             SamplerKind::Frozen => Box::new(uniform::Uniform::new(&params, true)),
             SamplerKind::Rejection => Box::new(rejection::Rejection::new(&params)),
+            SamplerKind::Smc => Box::new(smc::Smc::new(&params)),
         };
         Sampler {
             params,
