@@ -148,7 +148,14 @@ impl Tracer {
         if ids.len() * MOVING_SHARE > self.tris.len() {
             return self.rebuild(frame);
         }
-        self.tris = to_obvhs(frame);
+        for &i in &moved {
+            let [a, b, c] = frame.tris[i as usize];
+            self.tris[i as usize] = Triangle {
+                v0: a.into(),
+                v1: b.into(),
+                v2: c.into(),
+            };
+        }
         if ids.len() != self.moving.ids.len() {
             let mut is_moving = vec![false; self.tris.len()];
             for &i in &ids {
