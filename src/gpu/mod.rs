@@ -331,24 +331,12 @@ impl Gpu {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &attributes,
         };
-        self.raster_pipeline_over(label, module, layout, target, vertices)
+        self.raster_pipeline_over(label, module, layout, target, vertices, ("vs", "fs"))
     }
 
-    /// A render pipeline (entry points `vs` and `fs`, no culling, depth test `Less` on a
+    /// A render pipeline (entry points `(vs, fs)`, no culling, depth test `Less` on a
     /// Depth32Float target) over vertices laid out as `vertices`, writing one colour target.
     pub(crate) fn raster_pipeline_over(
-        &self,
-        label: &str,
-        module: &wgpu::ShaderModule,
-        layout: &wgpu::BindGroupLayout,
-        target: wgpu::TextureFormat,
-        vertices: wgpu::VertexBufferLayout,
-    ) -> wgpu::RenderPipeline {
-        self.raster_pipeline_with(label, module, layout, target, vertices, ("vs", "fs"))
-    }
-
-    /// [`Gpu::raster_pipeline_over`] with other entry points (vertex, fragment).
-    pub(crate) fn raster_pipeline_with(
         &self,
         label: &str,
         module: &wgpu::ShaderModule,

@@ -118,6 +118,7 @@ impl RadiosityPass {
                 step_mode: wgpu::VertexStepMode::Vertex,
                 attributes: &attributes,
             },
+            ("vs", "fs"),
         );
         let stride = super::gbuffer::uniform_stride::<RadCamera>(gpu);
         let camera = gpu.buffer(

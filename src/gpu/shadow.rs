@@ -239,7 +239,7 @@ impl ShadowMaps {
             };
             let corners = 3 * triangles.max(1) as u64;
             Shared {
-                pipeline: gpu.raster_pipeline_with(
+                pipeline: gpu.raster_pipeline_over(
                     PASS.name,
                     &module,
                     &layout,
