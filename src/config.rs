@@ -502,11 +502,14 @@ impl Default for Quality {
     }
 }
 
-/// Points in the scene's ISM point set for `points_per_vpl` points a slot: 16 slots' worth,
+/// Points in the ISM point set of a scene of `triangles` triangles for `points_per_vpl` points
+/// a slot: 16 slots' worth or one a triangle, whichever is more (a point set smaller than the
+/// triangle count leaves small triangles, a column's facets, with no point in any tile),
 /// between 2^16 and 2^22, and never fewer than one slot's.
-pub fn ism_point_set_size(points_per_vpl: u32) -> u32 {
+pub fn ism_point_set_size(points_per_vpl: u32, triangles: usize) -> u32 {
     points_per_vpl
         .saturating_mul(16)
+        .max(triangles.min(u32::MAX as usize) as u32)
         .clamp(1 << 16, 1 << 22)
         .max(points_per_vpl)
 }
@@ -649,8 +652,9 @@ impl Render {
         self.sequence.scene_or(DEFAULT_ANIMATED_SCENE)
     }
 
-    /// The GPU renderer's sizes (checked against the adapter by the renderer).
-    pub fn renderer_config(&self) -> RendererConfig {
+    /// The GPU renderer's sizes for a scene of `triangles` triangles (checked against the
+    /// adapter by the renderer).
+    pub fn renderer_config(&self, triangles: usize) -> RendererConfig {
         let q = &self.quality;
         RendererConfig {
             width: self.sequence.size.width,
@@ -658,7 +662,7 @@ impl Render {
             max_vpls: self.vpls,
             ism_size: q.ism_size,
             points_per_vpl: q.ism_points,
-            num_points: ism_point_set_size(q.ism_points),
+            num_points: ism_point_set_size(q.ism_points, triangles),
             pull_levels: q.pull_levels,
             ism_bias: q.ism_bias,
             light_samples: q.light_samples,
@@ -1253,6 +1257,19 @@ impl std::fmt::Display for SamplerKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_ism_point_set_grows_with_the_triangles() {
+        // The Cornell box (36 triangles) keeps 16 slots' worth of the default 4096 points.
+        assert_eq!(ism_point_set_size(4096, 36), 1 << 16);
+        assert_eq!(ism_point_set_size(8192, 36), 1 << 17);
+        // The atrium: one point a triangle, more than 16 slots' worth.
+        assert_eq!(ism_point_set_size(4096, 128_060), 128_060);
+        // Bounded both ways, and never below one slot's points.
+        assert_eq!(ism_point_set_size(4096, 50_000_000), 1 << 22);
+        assert_eq!(ism_point_set_size(1, 0), 1 << 16);
+        assert_eq!(ism_point_set_size(1 << 23, 0), 1 << 23);
+    }
 
     #[test]
     fn frames_and_sizes_parse_as_documented() {

@@ -51,7 +51,7 @@ impl Pipeline {
     pub fn new(gpu: Arc<Gpu>, scene: Scene, cfg: &config::Render) -> Result<Pipeline> {
         cfg.validate()?;
         let frame0 = scene.at(0.0);
-        let mut renderer = Renderer::new(gpu, cfg.renderer_config(), &frame0)?;
+        let mut renderer = Renderer::new(gpu, cfg.renderer_config(frame0.tris.len()), &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;
         let tracer = Tracer::new(&frame0);

@@ -839,7 +839,7 @@ mod tests {
             },
             ..Default::default()
         }
-        .renderer_config()
+        .renderer_config(36)
     }
 
     /// The supersampled buffers are checked against the adapter: a grid past its textures or
