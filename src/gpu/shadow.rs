@@ -193,7 +193,8 @@ struct Shared {
     pipeline: wgpu::RenderPipeline,
     positions: wgpu::Buffer,
     indices: wgpu::Buffer,
-    count: u32,
+    /// The last upload's corners and indices (empty before the first).
+    corners: (Vec<[f32; 3]>, Vec<u32>),
 }
 
 /// The distinct corner positions of `tris` (as `[x, y, z]`) and three indices into them a
@@ -214,6 +215,26 @@ pub fn shared_corners(tris: &[[Vec3; 3]]) -> (Vec<[f32; 3]>, Vec<u32>) {
         })
         .collect();
     (positions, indices)
+}
+
+/// Brings `corners` (positions and indices, as [`shared_corners`] gives them) to `tris`: the
+/// shared positions move with their corners, and only if corners that were one have parted
+/// (or the triangles are others) are they shared anew, returning true.
+pub fn move_corners(corners: &mut (Vec<[f32; 3]>, Vec<u32>), tris: &[[Vec3; 3]]) -> bool {
+    let (positions, indices) = corners;
+    let kept = indices.len() == 3 * tris.len() && {
+        for (&i, p) in indices.iter().zip(tris.iter().flatten()) {
+            positions[i as usize] = p.to_array();
+        }
+        indices
+            .iter()
+            .zip(tris.iter().flatten())
+            .all(|(&i, p)| positions[i as usize] == p.to_array())
+    };
+    if !kept {
+        *corners = shared_corners(tris);
+    }
+    !kept
 }
 
 impl ShadowMaps {
@@ -257,7 +278,7 @@ impl ShadowMaps {
                     4 * corners,
                     wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
                 ),
-                count: 0,
+                corners: Default::default(),
             }
         });
         let n = (samples * 5).max(1);
@@ -315,16 +336,17 @@ impl ShadowMaps {
         }
     }
 
-    /// Uploads the frame's shared corners (after its geometry moved, or first).
+    /// Uploads the frame's shared corners (after its geometry moved, or first). The last
+    /// frame's sharing is kept if it still holds (every corner at its shared position once the
+    /// positions are moved), so a moving scene re-indexes only when corners that met part.
     pub fn upload(&mut self, gpu: &Gpu, tris: &[[Vec3; 3]]) {
-        if let Some(s) = &mut self.shared {
-            let (positions, indices) = shared_corners(tris);
+        let Some(s) = &mut self.shared else { return };
+        if move_corners(&mut s.corners, tris) {
             gpu.queue
-                .write_buffer(&s.positions, 0, bytemuck::cast_slice(&positions));
-            gpu.queue
-                .write_buffer(&s.indices, 0, bytemuck::cast_slice(&indices));
-            s.count = indices.len() as u32;
+                .write_buffer(&s.indices, 0, bytemuck::cast_slice(&s.corners.1));
         }
+        gpu.queue
+            .write_buffer(&s.positions, 0, bytemuck::cast_slice(&s.corners.0));
     }
 
     /// Renders the shadow maps of `samples` (the faces [`drawn_faces`] gives, face `k` of
@@ -383,7 +405,7 @@ impl ShadowMaps {
                     pass.set_scissor_rect(0, 0, w, h);
                     pass.set_vertex_buffer(0, s.positions.slice(..));
                     pass.set_index_buffer(s.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..s.count, 0, 0..1);
+                    pass.draw_indexed(0..s.corners.1.len() as u32, 0, 0..1);
                 }
                 None => gbuffer::raster_tiles(
                     enc,
@@ -433,7 +455,7 @@ mod tests {
     }
 
     #[test]
-    fn shared_corners_rebuild_every_triangle_and_share_the_boxs_corners() {
+    fn shared_corners_rebuild_every_triangle_and_follow_moving_geometry() {
         let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
         let f = scene.at(0.0);
         let (positions, indices) = shared_corners(&f.tris);
@@ -446,6 +468,31 @@ mod tests {
         // 36 triangles: 108 corners at 28 distinct positions (the room's 8, the two boxes'
         // 16, the light's 4): each shaded once a face instead of 3.9 times.
         assert_eq!(positions.len(), 28);
+        // cornell-box's small box slides and turns: its corners move together, so the
+        // sharing holds and only the positions move.
+        let scene = crate::scene::builtin::load("cornell-box").unwrap().unwrap();
+        let (f0, f1) = (scene.at(0.0), scene.at(1.5));
+        let mut corners = shared_corners(&f0.tris);
+        let indices = corners.1.clone();
+        assert!(!move_corners(&mut corners, &f1.tris));
+        assert_eq!(corners.1, indices);
+        let rebuilt = |(p, i): &(Vec<[f32; 3]>, Vec<u32>)| -> Vec<[f32; 3]> {
+            i.iter().map(|&k| p[k as usize]).collect()
+        };
+        let want: Vec<[f32; 3]> = f1.tris.iter().flatten().map(|p| p.to_array()).collect();
+        assert_eq!(rebuilt(&corners), want);
+        // Two triangles that shared a corner part: shared anew.
+        let mut two = [
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+            [Vec3::ZERO, Vec3::Y, Vec3::Z],
+        ];
+        let mut corners = shared_corners(&two);
+        assert_eq!(corners.0.len(), 4);
+        two[1][0] = Vec3::NEG_X;
+        assert!(move_corners(&mut corners, &two));
+        assert_eq!(corners.0.len(), 5);
+        let want: Vec<[f32; 3]> = two.iter().flatten().map(|p| p.to_array()).collect();
+        assert_eq!(rebuilt(&corners), want);
     }
 
     #[test]
