@@ -50,6 +50,13 @@ struct Estimates {
     se: [f64; 4],
 }
 
+impl Estimates {
+    /// The standard error of the difference of quadrant `k`'s mean and `other`'s.
+    fn se_of_difference(&self, other: &Estimates, k: usize) -> f64 {
+        (self.se[k].powi(2) + other.se[k].powi(2)).sqrt()
+    }
+}
+
 /// Mean and standard error of per-frame estimates; with `batches`, by batch means (for
 /// correlated chains).
 fn stats(samples: &[[f64; 4]], batches: usize) -> Estimates {
@@ -158,8 +165,7 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
             ("mh rate 0.1", &lazy),
             ("smc rate 0.1", &smc),
         ] {
-            let z = (e.mean[k] - uniform.mean[k]).abs()
-                / (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
+            let z = (e.mean[k] - uniform.mean[k]).abs() / e.se_of_difference(&uniform, k);
             println!(
                 "quadrant {k}: {name} {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
                 e.mean[k], e.se[k], uniform.mean[k], uniform.se[k]
@@ -177,10 +183,7 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         // would be a factor of about 2.4) falls far outside the bound.
         for e in [&cdf, &rejection] {
             let wrong = e.mean[k] * 0.7;
-            assert!(
-                (wrong - uniform.mean[k]).abs()
-                    > 4.0 * (e.se[k].powi(2) + uniform.se[k].powi(2)).sqrt()
-            );
+            assert!((wrong - uniform.mean[k]).abs() > 4.0 * e.se_of_difference(&uniform, k));
         }
     }
 }
@@ -488,8 +491,7 @@ fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
     println!("particles born in frame 0: {old:.3}");
     assert!(old > 0.4, "most particles are old: {old}");
     for k in 0..4 {
-        let z = (smc.mean[k] - uniform.mean[k]).abs()
-            / (smc.se[k].powi(2) + uniform.se[k].powi(2)).sqrt();
+        let z = (smc.mean[k] - uniform.mean[k]).abs() / smc.se_of_difference(&uniform, k);
         println!(
             "quadrant {k}: smc {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
             smc.mean[k], smc.se[k], uniform.mean[k], uniform.se[k]
