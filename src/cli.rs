@@ -222,6 +222,7 @@ mod tests {
             ("render", "--aa", "0", "9"),
             ("render", "--edge-rays", "", "33"),
             ("render", "--compensate", "", "257"),
+            ("render", "--accumulate", "", "4097"),
             ("compare", "--aa", "0", "9"),
             ("bench", "--aa", "0", "9"),
             ("reference", "--spp", "0", "99999999"),

@@ -473,6 +473,12 @@ pub struct Quality {
     /// clamp leaves out where surfaces meet within --clamp (Kollig & Keller 2004; 0: off)
     #[arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true)]
     pub compensate: u32,
+    /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'
+    /// estimates of its surface point (reprojected; a disoccluded pixel starts anew), while
+    /// the triangles and emitter samples stay the same; a moving light or object starts it
+    /// anew everywhere (0 or 1: off, every frame stands alone)
+    #[arg(long, default_value_t = Quality::default().accumulate, allow_hyphen_values = true)]
+    pub accumulate: u32,
 }
 
 impl Default for Quality {
@@ -498,6 +504,7 @@ impl Default for Quality {
             // Off: it costs CPU time in proportion to the pixels near creases (README,
             // "Clamping-bias compensation").
             compensate: 0,
+            accumulate: 0,
         }
     }
 }
@@ -536,7 +543,8 @@ impl Quality {
         check::int("--interleave", self.interleave, 1, 8)?;
         check::int("--aa", self.aa, 1, 8)?;
         check::int("--edge-rays", self.edge_rays, 0, 32)?;
-        check::int("--compensate", self.compensate, 0, 256)
+        check::int("--compensate", self.compensate, 0, 256)?;
+        check::int("--accumulate", self.accumulate, 0, 4096)
     }
 }
 
@@ -671,6 +679,7 @@ impl Render {
             aa: q.aa,
             edge_rays: q.edge_rays,
             compensate: q.compensate,
+            accumulate: q.accumulate,
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,

@@ -294,6 +294,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::gather::PASS,
         &super::interleave::PASS,
         &super::compose::PASS,
+        &super::temporal::PASS,
         &super::resolve::PASS,
         &crate::radiosity::hemicube::PASS,
         &super::radiosity::PASS,

@@ -16,6 +16,7 @@ pub mod renderer;
 pub mod resolve;
 pub mod shadow;
 pub mod surface;
+pub mod temporal;
 
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;

@@ -10,7 +10,7 @@ use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
 use super::{
     check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer,
-    interleave::Interleave, ism, resolve::Resolve, shadow::ShadowMaps, Gpu,
+    interleave::Interleave, ism, resolve::Resolve, shadow::ShadowMaps, temporal::Temporal, Gpu,
 };
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
@@ -52,6 +52,9 @@ pub struct RendererConfig {
     pub edge_rays: u32,
     /// Rays a pixel for the clamping-bias compensation (`compensation`; 0: off).
     pub compensate: u32,
+    /// Temporal accumulation: the indirect light averages up to this many frames while the
+    /// light is the same (`temporal`; 0 or 1: off).
+    pub accumulate: u32,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,
@@ -96,7 +99,7 @@ pub struct RenderedImage {
 }
 
 /// The passes of a frame, in order, as timings name them.
-pub const PASSES: [&str; 10] = [
+pub const PASSES: [&str; 11] = [
     "gbuffer",
     "surface",
     "shadow_maps",
@@ -105,6 +108,7 @@ pub const PASSES: [&str; 10] = [
     "ism_pullpush",
     "gather",
     "interleave",
+    "temporal",
     "compose",
     "resolve",
 ];
@@ -124,6 +128,9 @@ pub struct Reuse {
     pub ism_tiles_kept: u32,
     /// VPL slots whose ISM tile was splatted and pulled/pushed again.
     pub ism_tiles_drawn: u32,
+    /// With `--accumulate`: the indirect light averaged the last frame's history (same
+    /// triangles and emitter samples; else it started anew).
+    pub history_kept: bool,
 }
 
 /// What the last frame uploaded, to tell what changed.
@@ -137,6 +144,13 @@ struct Last {
 /// Whether two slices hold the same bits.
 fn same<T: bytemuck::Pod>(a: &[T], b: &[T]) -> bool {
     bytemuck::cast_slice::<T, u8>(a) == bytemuck::cast_slice::<T, u8>(b)
+}
+
+/// The G-buffer's camera (unjittered) for frame `f`, its depth range reaching `cam_far`.
+fn camera_view_proj(f: &Frame, c: &RendererConfig, cam_far: f32) -> glam::Mat4 {
+    f.camera
+        .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
+        * f.camera.view()
 }
 
 /// Buffers the frame's outputs are copied into for reading back.
@@ -184,6 +198,8 @@ pub struct Renderer {
     interleave: Option<Interleave>,
     /// The interleave pattern's shift in x and y (from the seed; each below `interleave`).
     pub interleave_shift: (u32, u32),
+    /// Temporal accumulation of the indirect light (`accumulate > 1`).
+    temporal: Option<Temporal>,
     compose: Compose,
     /// The box filter of the sub-samples into pixels (`aa > 1`).
     resolve: Option<Resolve>,
@@ -377,6 +393,18 @@ impl Renderer {
             )
         });
         let indirect = interleave.as_ref().map_or(&gather.output, |f| &f.output);
+        let temporal = (c.accumulate > 1).then(|| {
+            Temporal::new(
+                &gpu,
+                &params,
+                &tris,
+                &gbuffer.view,
+                indirect,
+                pixels,
+                c.accumulate,
+            )
+        });
+        let indirect = temporal.as_ref().map_or(indirect, |t| &t.output);
         let compose = Compose::new(
             &gpu,
             &params,
@@ -434,6 +462,7 @@ impl Renderer {
             gather,
             interleave,
             interleave_shift,
+            temporal,
             compose,
             resolve,
         })
@@ -485,7 +514,7 @@ impl Renderer {
     }
 
     /// Uploads the triangles and the vertex buffer unless they are the same bits as last
-    /// frame's; returns whether the geometry is still.
+    /// frame's (and reuse is on); returns whether they are the same bits.
     fn upload_geometry(&mut self, f: &Frame) -> bool {
         let tris: Vec<Tri> = (0..f.tris.len())
             .map(|i| Tri {
@@ -497,8 +526,8 @@ impl Renderer {
                 emission: f.emission(i).extend(0.0).to_array(),
             })
             .collect();
-        let still = self.reuse && same(&self.last.tris, &tris);
-        if !still {
+        let same_bits = same(&self.last.tris, &tris);
+        if !(self.reuse && same_bits) {
             let q = &self.gpu.queue;
             q.write_buffer(&self.tris, 0, bytemuck::cast_slice(&tris));
             let verts: Vec<Vertex> = f
@@ -516,7 +545,7 @@ impl Renderer {
             self.shadows.upload(&self.gpu, &f.tris);
             self.last.tris = tris;
         }
-        still
+        same_bits
     }
 
     /// Uploads the VPLs if any changed and the (slot, point offset) list of the slots whose
@@ -556,27 +585,35 @@ impl Renderer {
         (changed, uploaded)
     }
 
-    /// Uploads the emitter samples unless they are the same as last frame's; returns
-    /// whether they were kept.
+    /// Uploads the emitter samples unless they are the same as last frame's (and reuse is
+    /// on); returns whether they are the same.
     fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
         let size = self.config.shadow_size;
         let lights: Vec<LightSample> = samples.iter().map(|s| LightSample::of(s, size)).collect();
-        let kept = self.reuse && same(&self.last.lights, &lights);
+        let same_bits = same(&self.last.lights, &lights);
+        let kept = self.reuse && same_bits;
         if !lights.is_empty() && !kept {
             self.gpu
                 .queue
                 .write_buffer(&self.lights, 0, bytemuck::cast_slice(&lights));
         }
         self.last.lights = lights;
-        kept
+        same_bits
     }
 
     /// Uploads what changed since the last frame and the frame's parameters; returns the
     /// slots whose ISM tiles must be drawn again and what was reused.
-    fn upload(&mut self, input: &GpuFrame, far: f32, near: f32) -> Result<(Vec<u32>, Reuse)> {
+    fn upload(
+        &mut self,
+        input: &GpuFrame,
+        far: f32,
+        near: f32,
+        view_proj: glam::Mat4,
+    ) -> Result<(Vec<u32>, Reuse)> {
         self.check_input(input)?;
         let f = input.frame;
-        let still = self.upload_geometry(f);
+        let same_tris = self.upload_geometry(f);
+        let still = self.reuse && same_tris;
         let (changed, vpls_uploaded) = self.upload_vpls(input.vpls, still);
         if !changed.is_empty() && !input.near.is_empty() {
             self.gpu.queue.write_buffer(
@@ -585,7 +622,15 @@ impl Renderer {
                 bytemuck::cast_slice(input.near),
             );
         }
-        let lights_kept = self.upload_lights(input.lights);
+        let same_lights = self.upload_lights(input.lights);
+        let lights_kept = self.reuse && same_lights;
+        // The history holds while the light is the same: same triangles, same emitter samples.
+        let history_kept = if let Some(t) = &mut self.temporal {
+            let offset = super::gbuffer::subsample(0, 0, self.config.aa);
+            t.upload(&self.gpu, view_proj, offset, same_tris && same_lights)
+        } else {
+            false
+        };
         let c = &self.config;
         let (gw, gh) = c.grid();
         let params = Params {
@@ -625,6 +670,7 @@ impl Renderer {
             shadow_maps_kept: false,
             ism_tiles_kept: input.vpls.len() as u32 - changed.len() as u32,
             ism_tiles_drawn: changed.len() as u32,
+            history_kept,
         };
         Ok((changed, reuse))
     }
@@ -645,10 +691,7 @@ impl Renderer {
         // size, each sampling every pixel at one offset; the output itself with aa = 1).
         let (gw, gh) = c.grid();
         // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample.
-        let view_proj = f
-            .camera
-            .projection(c.width, c.height, (cam_far * 1e-5).max(1e-3), cam_far)
-            * f.camera.view();
+        let view_proj = camera_view_proj(f, &c, cam_far);
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
         rec.end_pass()?;
@@ -696,6 +739,12 @@ impl Renderer {
             f.encode(&mut rec.enc, iw, ih);
         }
         rec.end_pass()?;
+        // temporal: G-buffer, indirect light, last frame's history -> indirect light averaged
+        // over frames, this frame's history (accumulate > 1).
+        if let Some(t) = &mut self.temporal {
+            t.encode(&mut rec.enc, iw, ih);
+        }
+        rec.end_pass()?;
         // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview
         // (supersampled: each sub-sample's indirect light from its pixel's, no preview).
         self.compose.encode(&mut rec.enc, gw, gh);
@@ -727,6 +776,7 @@ impl Renderer {
             .interleave
             .as_ref()
             .map_or(&self.gather.output, |f| &f.output);
+        let indirect = self.temporal.as_ref().map_or(indirect, |t| &t.output);
         let (hdr, ldr, direct, indirect) = match &self.resolve {
             Some(r) => (&r.hdr, &r.ldr, &r.direct, &r.indirect),
             None => (
@@ -787,7 +837,8 @@ impl Renderer {
         let near = far * 1e-5;
         let cam_far = far.max((f.camera.position - (lo + hi) * 0.5).length() * 3.0);
         let t_upload = Instant::now();
-        let (changed, mut reuse) = self.upload(input, far, near)?;
+        let view_proj = camera_view_proj(f, &self.config, cam_far);
+        let (changed, mut reuse) = self.upload(input, far, near, view_proj)?;
         let upload_s = t_upload.elapsed().as_secs_f64();
         let t_gpu = Instant::now();
         // The recorder borrows the device and the timestamp queries while the passes
