@@ -5,10 +5,13 @@ What it does:
  1. The reference: `irad reference cornell-orbit --size 256x256 --frames 8..12 --spp 2048`
     (frames 8 to 11), made once and cached in OUT/reference (re-made only if its run.json
     does not match the scene, size, frames and spp asked for).
- 2. For each VPL count (256, 1024, 4096), --repeat times:
-    `irad render cornell-orbit --size 256x256 --frames 8..12 --vpls N --out OUT/vplsN_rR`
-    then `irad metrics OUT/vplsN_rR OUT/reference`; irad's relMSE is the mean over the four
-    frames (metrics.json `mean_rel_mse`).
+ 2. For each mode (--mode; by default one, every frame alone) and VPL count (256, 1024,
+    4096), --repeat times with seeds 1, 2, 3:
+    `irad render cornell-orbit --size 256x256 --frames 8..12 --vpls N --seed R+1 --out
+    OUT/vplsN_rR` (a mode with history H renders from frame 8 - H, with its extra arguments,
+    e.g. `acc:8:--accumulate 16`: frames 0..12, the indirect light averaged over frames) then
+    `irad metrics` of frames 8..11 against OUT/reference; irad's relMSE is the mean over the
+    four frames (metrics.json `mean_rel_mse`) and the seeds.
  3. Mitsuba's seconds and relMSE per sample count come from mitsuba_cornell.py's CSV
     (--mitsuba-csv; made by running that benchmark if the file is missing).
  4. For each VPL count: Mitsuba's seconds at irad's relMSE, interpolated linearly in
@@ -17,7 +20,7 @@ What it does:
     speed ratio = Mitsuba's seconds / irad's seconds (above 1: irad is faster).
 
 irad's time is the marginal seconds per frame: the mean of run.json's per-frame `seconds`
-over the frames after the first (9, 10, 11). A frame's `seconds` runs from the scene at the
+over the frames after the first (9, 10, 11; with history frames before them, all four). A frame's `seconds` runs from the scene at the
 frame's time to its image read back from the GPU (VPL selection, BVH update, all GPU
 passes); it leaves out process start, adapter and pipeline creation, and writing the EXR,
 PNG and GIF files. The first frame is left out too: it pays one-off costs (first use of
@@ -58,7 +61,7 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 benches/speed_vs_mitsuba.py [--irad target/release/irad] [--vpls 256,1024,4096]
         [--repeat 3] [--out out/bench/speed] [--mitsuba-csv out/bench/mitsuba/mitsuba_cornell.csv]
-        [--ref DIR] [--reuse]
+        [--ref DIR] [--reuse] [--mode TAG:HISTORY:ARGS ...]
 
 Writes OUT/speed_vs_mitsuba.csv with the printed table's figures.
 """
@@ -138,31 +141,61 @@ def reference(irad, out, size, frames, spp, given=None):
     return ref
 
 
-def irad_render(irad, out, size, frames, vpls, rep, reuse):
-    """One render (or, with `reuse`, a finished one found in its folder): its folder,
-    marginal s/frame, first frame's s and the process's wall s (None if reused)."""
-    d = os.path.join(out, f"vpls{vpls}_r{rep}")
+def irad_render(irad, out, size, frames, vpls, rep, reuse, mode):
+    """One render of seed rep + 1 (or, with `reuse`, a finished one found in its folder),
+    from frame A - history to B with `mode`'s extra arguments: the folder holding the
+    measured frames A..B, marginal s/frame, the first measured frame's s and the process's
+    wall s (None if reused)."""
+    tag, history, extra = mode
+    d = os.path.join(out, f"{tag}vpls{vpls}_r{rep}")
     a, b = frames
+    start = a - history
     rj = os.path.join(d, "run.json")
+    args = ["render", SCENE, "--size", f"{size}x{size}", "--frames", f"{start}..{b}",
+            "--vpls", str(vpls), "--seed", str(rep + 1), *extra, "--out", d]
     wall = None
     done = False
     if reuse and os.path.exists(rj):
         r = read_json(rj)
-        done = (r.get("scene") == SCENE and r["gpu"]["width"] == size and r["gpu"]["height"] == size
-                and r["gpu"]["max_vpls"] == vpls and [f["frame"] for f in r["frames"]] == list(range(a, b)))
+        done = r.get("argv", args) == args and (
+            r.get("scene") == SCENE and r["gpu"]["width"] == size and r["gpu"]["height"] == size
+            and r["gpu"]["max_vpls"] == vpls
+            and [f["frame"] for f in r["frames"]] == list(range(start, b)))
     if not done:
-        wall = run_irad(irad, ["render", SCENE, "--size", f"{size}x{size}", "--frames",
-                               f"{a}..{b}", "--vpls", str(vpls), "--out", d], d + ".log")
-    secs = [f["seconds"] for f in read_json(rj)["frames"]]
+        wall = run_irad(irad, args, d + ".log")
+    frames_run = read_json(rj)["frames"]
+    secs = [f["seconds"] for f in frames_run if f["frame"] >= a]
     if len(secs) < 2:
         die(f"{rj}: need at least 2 frames for a marginal time, found {len(secs)}")
-    return d, statistics.mean(secs[1:]), secs[0], wall
+    # The measured frames alone, for `irad metrics` against the reference's.
+    measured = d + "_measured"
+    os.makedirs(measured, exist_ok=True)
+    for f in range(a, b):
+        name = f"frame_{f:04}.exr"
+        link = os.path.join(measured, name)
+        if os.path.lexists(link):
+            os.remove(link)
+        os.symlink(os.path.abspath(os.path.join(d, name)), link)
+    # With history frames before A, every measured frame pays the same per-frame work (the
+    # first rendered frame's one-off costs fall before A): all of them count.
+    marginal = secs if history > 0 else secs[1:]
+    return measured, statistics.mean(marginal), secs[0], wall
 
 
 def irad_rel_mse(irad, d, ref):
     """`irad metrics d ref`: the mean relMSE over the frames."""
     run_irad(irad, ["metrics", d, ref], d + ".metrics.log")
     return read_json(os.path.join(d, "metrics.json"))["mean_rel_mse"]
+
+
+def parse_mode(s):
+    """`--mode TAG:HISTORY:ARGS`: a row label, frames rendered before the measured ones, and
+    extra `irad render` arguments (space-separated)."""
+    parts = s.split(":", 2)
+    if len(parts) != 3 or not parts[1].isdigit():
+        die(f"--mode '{s}': expected TAG:HISTORY:ARGS, e.g. 'acc:8:--accumulate 16'")
+    tag, history, extra = parts
+    return (f"{tag}_" if tag else "", int(history), extra.split())
 
 
 def mitsuba_seconds_at(rows, target, key="seconds"):
@@ -198,7 +231,13 @@ def main(argv=None):
     p.add_argument("--frames", default="8..12", help="frames A..B (default %(default)s)")
     p.add_argument("--size", type=int, default=256, help="image side in pixels")
     p.add_argument("--ref-spp", type=int, default=2048, help="samples of irad's reference")
-    p.add_argument("--repeat", type=int, default=3, help="irad runs per VPL count")
+    p.add_argument("--repeat", type=int, default=3,
+                   help="irad runs per VPL count, run r with seed r + 1 (relMSE: their mean)")
+    p.add_argument("--mode", action="append",
+                   help="TAG:HISTORY:ARGS, repeatable: a row per VPL count rendered from HISTORY "
+                   "frames before the measured ones with extra irad render ARGS (default: one "
+                   "mode, ':0:', every frame alone); e.g. 'acc:8:--accumulate 16' measures frames "
+                   "8..12 of a render from frame 0 that averages the indirect light over frames")
     p.add_argument("--out", default="out/bench/speed", help="output folder")
     p.add_argument("--ref", help="an existing `irad reference` folder to use (checked against "
                    "the scene, size, frames and spp) instead of OUT/reference")
@@ -211,6 +250,10 @@ def main(argv=None):
         die("--repeat, --size and --ref-spp must be positive")
     vpls = mitsuba_cornell.parse_list(a.vpls, "vpls")
     frames = parse_frames(a.frames)
+    modes = [parse_mode(m) for m in (a.mode or [":0:"])]
+    for tag, history, _ in modes:
+        if history > frames[0]:
+            die(f"--mode {tag}: {history} history frames before frame {frames[0]}")
     irad = os.path.abspath(a.irad)
     if not (os.path.isfile(irad) and os.access(irad, os.X_OK)):
         die(f"--irad {a.irad}: no such executable (build it with `cargo build --release`)")
@@ -232,29 +275,36 @@ def main(argv=None):
 
     print(f"load average (1 min) before the runs: {os.getloadavg()[0]:.2f}")
     renders = {}
-    for n in vpls:
-        for rep in range(a.repeat):
-            d, m, first, wall = irad_render(irad, a.out, a.size, frames, n, rep, a.reuse)
-            renders.setdefault(n, []).append((d, m, first))
-            how = f"process {wall:.1f} s" if wall is not None else "reused"
-            print(f"irad {n:5} VPLs run {rep}: {m * 1e3:7.1f} ms/frame (first frame "
-                  f"{first * 1e3:.0f} ms, {how}), load {os.getloadavg()[0]:.1f}", flush=True)
+    for mode in modes:
+        for n in vpls:
+            for rep in range(a.repeat):
+                d, m, first, wall = irad_render(irad, a.out, a.size, frames, n, rep, a.reuse, mode)
+                renders.setdefault((mode[0], n), []).append((d, m, first))
+                how = f"process {wall:.1f} s" if wall is not None else "reused"
+                print(f"irad {mode[0] or 'alone_'}{n:<5} VPLs run {rep}: {m * 1e3:7.1f} ms/frame "
+                      f"(first measured frame {first * 1e3:.0f} ms, {how}), "
+                      f"load {os.getloadavg()[0]:.1f}", flush=True)
     print(f"load average (1 min) after the runs: {os.getloadavg()[0]:.2f}")
     ref = reference(irad, a.out, a.size, frames, a.ref_spp, a.ref)
     results = []
-    for n, runs in renders.items():
+    for (tag, n), runs in renders.items():
         errs = [irad_rel_mse(irad, d, ref) for d, _, _ in runs]
-        if max(errs) - min(errs) > 1e-9:
-            print(f"note: relMSE differs between runs ({min(errs):.6f} to {max(errs):.6f}); the mean is used")
         marg = sorted(r[1] for r in runs)
-        results.append({"vpls": n, "s_min": marg[0], "s_median": statistics.median(marg),
-                        "s_max": marg[-1], "first_s": statistics.median(r[2] for r in runs),
-                        "rel_mse": statistics.mean(errs)})
+        results.append({"mode": tag.rstrip("_") or "alone", "vpls": n, "s_min": marg[0],
+                        "s_median": statistics.median(marg), "s_max": marg[-1],
+                        "first_s": statistics.median(r[2] for r in runs),
+                        "rel_mse": statistics.mean(errs), "rel_mse_min": min(errs),
+                        "rel_mse_max": max(errs)})
 
     print()
     print(f"{SCENE} frames {frames[0]}..{frames[1]} at {a.size}x{a.size}, irad reference {a.ref_spp} spp; "
-          f"irad {a.repeat} runs (min / median / max), Mitsuba at irad's relMSE")
-    head = (f"{'VPLs':>5}  {'irad ms/frame (min/med/max)':>27}  {'relMSE':>8}  "
+          f"irad {a.repeat} runs, seeds 1..{a.repeat} (ms: min / median / max; relMSE: mean, "
+          f"min-max), Mitsuba at irad's mean relMSE")
+    for tag, history, extra in modes:
+        print(f"  mode {tag.rstrip('_') or 'alone'}: from frame {frames[0] - history}, "
+              f"`{' '.join(extra) or '(defaults)'}`")
+    head = (f"{'mode':>6}  {'VPLs':>5}  {'irad ms/frame (min/med/max)':>27}  "
+            f"{'relMSE (min-max)':>26}  "
             f"{'Mitsuba s':>9}  {'(spp)':>9}  {'speed':>6}  {'speed (mins)':>12}")
     print(head)
     print("-" * len(head))
@@ -264,8 +314,9 @@ def main(argv=None):
         r.update(mitsuba_s=ms, mitsuba_s_min=ms_min, extrapolated=extra,
                  ratio=ms / r["s_median"], ratio_min=ms_min / r["s_min"])
         band = f"{lo}-{hi}" + ("*" if extra else "")
-        print(f"{r['vpls']:>5}  {r['s_min'] * 1e3:>7.0f} / {r['s_median'] * 1e3:>6.0f} / "
-              f"{r['s_max'] * 1e3:>6.0f}    {r['rel_mse']:>8.5f}  {ms:>9.3f}  {band:>9}  "
+        spread = f"({r['rel_mse_min']:.5f}-{r['rel_mse_max']:.5f})"
+        print(f"{r['mode']:>6}  {r['vpls']:>5}  {r['s_min'] * 1e3:>7.0f} / {r['s_median'] * 1e3:>6.0f} / "
+              f"{r['s_max'] * 1e3:>6.0f}    {r['rel_mse']:>8.5f} {spread:>17}  {ms:>9.3f}  {band:>9}  "
               f"{r['ratio']:>5.2f}x  {r['ratio_min']:>11.2f}x")
     print("speed = Mitsuba's median seconds at the same relMSE / irad's median marginal seconds per\n"
           "frame; speed (mins) = the same with the fastest run of each (less disturbed by other work\n"
