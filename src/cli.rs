@@ -217,7 +217,7 @@ mod tests {
             ("render", "--ism-size", "48", "4096"),
             ("render", "--ism-points", "0", "99999999"),
             ("render", "--pull-levels", "", "100"),
-            ("render", "--light-samples", "0", "100000"),
+            ("render", "--light-samples", "", "100000"),
             ("render", "--shadow-size", "4", "100000"),
             ("render", "--aa", "0", "9"),
             ("render", "--edge-rays", "", "33"),
@@ -232,7 +232,7 @@ mod tests {
             ("compare", "--camera-points", "0", "99999999"),
             ("compare", "--pull-levels", "", "100"),
             ("bench", "--repeat", "0", "99999"),
-            ("bench", "--light-samples", "0", "100000"),
+            ("bench", "--light-samples", "", "100000"),
         ];
         for (cmd, flag, low, high) in ints {
             for bad in [low, high, "-1", "nan", "1.5"] {

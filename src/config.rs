@@ -450,7 +450,9 @@ pub struct Quality {
     /// ISM depth bias, in texel footprints
     #[arg(long, default_value_t = Quality::default().ism_bias, allow_hyphen_values = true)]
     pub ism_bias: f32,
-    /// Emitter samples for direct light (each a shadow hemicube)
+    /// Emitter samples for direct light (each a shadow hemicube); 0: from the scene, enough
+    /// that the direct light's sampling noise is about 5% of it where the camera looks at
+    /// frame 0 (see `light_samples_for`), 4 to 64
     #[arg(long, default_value_t = Quality::default().light_samples, allow_hyphen_values = true)]
     pub light_samples: u32,
     /// Shadow hemicube face side in texels
@@ -488,7 +490,9 @@ impl Default for Quality {
             ism_points: 4096,
             pull_levels: 3,
             ism_bias: 1.5,
-            light_samples: 32,
+            // From the scene (`Render::light_samples`): 26 for the Cornell box, 33 for
+            // cornell-light (its light starts near a wall), 24 for two-rooms, 13 for the atrium.
+            light_samples: 0,
             shadow_size: 256,
             interleave: 4,
             // 2x2 sub-samples: measured on the Cornell box at 128x128 (README, "Pixels"),
@@ -507,6 +511,28 @@ impl Default for Quality {
             accumulate: 0,
         }
     }
+}
+
+/// The relative variance of the direct light's N-sample estimate that `--light-samples 0`
+/// aims at: a relative standard error of 5% a pixel.
+pub const DIRECT_REL_VAR: f32 = 0.05 * 0.05;
+/// The range of `--light-samples 0`'s choice.
+pub const AUTO_LIGHT_SAMPLES: (u32, u32) = (4, 64);
+
+/// Emitter samples for a scene from the relative squared error of its direct light at each
+/// sample count (`errors`: (N, error) by increasing N, from
+/// `reference::twin::direct_relative_error` over what the camera sees): the fewest that reach
+/// [`DIRECT_REL_VAR`], else the most of them; within [`AUTO_LIGHT_SAMPLES`] and never fewer
+/// than `exact` (the slots the scene's punctual lights take, plus one if it has emitter
+/// triangles).
+pub fn light_samples_for(errors: &[(u32, f32)], exact: u32) -> u32 {
+    let (lo, hi) = AUTO_LIGHT_SAMPLES;
+    let n = errors
+        .iter()
+        .find(|&&(_, e)| e <= DIRECT_REL_VAR)
+        .or(errors.last())
+        .map_or(lo, |&(n, _)| n);
+    n.clamp(lo, hi).max(exact)
 }
 
 /// Points in the ISM point set of a scene of `triangles` triangles for `points_per_vpl` points
@@ -538,7 +564,7 @@ impl Quality {
             self.ism_size.trailing_zeros(),
         )?;
         check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
-        check::int("--light-samples", self.light_samples, 1, 4096)?;
+        check::int("--light-samples", self.light_samples, 0, 4096)?;
         check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
         check::int("--interleave", self.interleave, 1, 8)?;
         check::int("--aa", self.aa, 1, 8)?;
@@ -673,7 +699,13 @@ impl Render {
             num_points: ism_point_set_size(q.ism_points, triangles),
             pull_levels: q.pull_levels,
             ism_bias: q.ism_bias,
-            light_samples: q.light_samples,
+            // From the scene: the pipeline chooses (`Render::light_samples`, within the
+            // adapter's limit); the fewest it can choose stand in for the checks before.
+            light_samples: if q.light_samples == 0 {
+                AUTO_LIGHT_SAMPLES.0
+            } else {
+                q.light_samples
+            },
             shadow_size: q.shadow_size,
             interleave: q.interleave,
             aa: q.aa,
@@ -684,6 +716,35 @@ impl Render {
             exposure: self.exposure,
             seed: self.sequence.seed,
         }
+    }
+
+    /// Emitter samples for the sequence: `--light-samples`, or (0) from the scene at frame 0
+    /// (`frame0`, traced by `tracer`) as the camera sees it at 64x64 pixel centres, by
+    /// [`light_samples_for`].
+    pub fn light_samples(
+        &self,
+        frame0: &crate::scene::Frame,
+        tracer: &crate::trace::Tracer,
+    ) -> u32 {
+        if self.quality.light_samples > 0 {
+            return self.quality.light_samples;
+        }
+        let samples = frame0.emitter_samples(self.sequence.seed ^ 0x11647, 256);
+        let points = crate::reference::twin::pixel_points(frame0, tracer, 64, 64);
+        let (lo, hi) = AUTO_LIGHT_SAMPLES;
+        let counts: Vec<u32> = (lo..=hi).collect();
+        let errors = crate::reference::twin::direct_relative_error(
+            frame0, tracer, &points, &samples, &counts,
+        );
+        let pairs: Vec<(u32, f32)> = counts.into_iter().zip(errors).collect();
+        let area = samples
+            .iter()
+            .any(|l| l.kind == crate::scene::SampleKind::Area);
+        let exact = samples
+            .iter()
+            .filter(|l| l.kind != crate::scene::SampleKind::Area)
+            .count();
+        light_samples_for(&pairs, exact as u32 + area as u32)
     }
 
     /// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
@@ -1266,6 +1327,31 @@ impl std::fmt::Display for SamplerKind {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn light_samples_follow_the_direct_lights_variance() {
+        // The fewest samples whose error is at most 0.0025, else the most tried.
+        let errs =
+            |relvar: f32| -> Vec<(u32, f32)> { (4..=64).map(|n| (n, relvar / n as f32)).collect() };
+        assert_eq!(light_samples_for(&errs(0.074), 1), 30);
+        assert_eq!(light_samples_for(&errs(0.024), 1), 10);
+        assert_eq!(light_samples_for(&errs(0.0), 1), 4);
+        assert_eq!(light_samples_for(&errs(50.0), 1), 64);
+        assert_eq!(light_samples_for(&[], 1), 4);
+        // Never fewer than the exact (punctual) slots.
+        assert_eq!(light_samples_for(&errs(0.0), 7), 7);
+        assert_eq!(light_samples_for(&errs(50.0), 80), 80);
+        // An explicit --light-samples is kept; 0 chooses from the scene.
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let tracer = crate::trace::Tracer::new(&f);
+        let mut r = Render::default();
+        r.quality.light_samples = 12;
+        assert_eq!(r.light_samples(&f, &tracer), 12);
+        r.quality.light_samples = 0;
+        let n = r.light_samples(&f, &tracer);
+        assert!((26..=34).contains(&n), "the Cornell box chose {n}");
+    }
 
     #[test]
     fn the_ism_point_set_grows_with_the_triangles() {

@@ -51,10 +51,19 @@ impl Pipeline {
     pub fn new(gpu: Arc<Gpu>, scene: Scene, cfg: &config::Render) -> Result<Pipeline> {
         cfg.validate()?;
         let frame0 = scene.at(0.0);
-        let mut renderer = Renderer::new(gpu, cfg.renderer_config(frame0.tris.len()), &frame0)?;
+        let tracer = Tracer::new(&frame0);
+        let mut rc = cfg.renderer_config(frame0.tris.len());
+        // Chosen from the scene (--light-samples 0) within the adapter's shadow layers (5 a
+        // sample); a count the flag names is checked against them by the renderer.
+        rc.light_samples = if cfg.quality.light_samples == 0 {
+            let most = (gpu.limits.max_texture_array_layers / 5).max(1);
+            cfg.light_samples(&frame0, &tracer).min(most)
+        } else {
+            cfg.quality.light_samples
+        };
+        let mut renderer = Renderer::new(gpu, rc, &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;
-        let tracer = Tracer::new(&frame0);
         let params = cfg.sampler_params(&scene);
         let sampler = Sampler::new(params.clone());
         let classical = (cfg.method != Method::Instant).then(|| Classical {
