@@ -719,8 +719,8 @@ impl Render {
     }
 
     /// Emitter samples for the sequence: `--light-samples`, or (0) from the scene at frame 0
-    /// (`frame0`, traced by `tracer`) as the camera sees it at 64x64 pixel centres, by
-    /// [`light_samples_for`].
+    /// (`frame0`, traced by `tracer`) as the camera sees it at 64 pixel centres across (in the
+    /// image's aspect), by [`light_samples_for`].
     pub fn light_samples(
         &self,
         frame0: &crate::scene::Frame,
@@ -730,7 +730,9 @@ impl Render {
             return self.quality.light_samples;
         }
         let samples = frame0.emitter_samples(self.sequence.seed ^ 0x11647, 256);
-        let points = crate::reference::twin::pixel_points(frame0, tracer, 64, 64);
+        let size = &self.sequence.size;
+        let rows = (64 * size.height).div_ceil(size.width.max(1)).clamp(1, 256);
+        let points = crate::reference::twin::pixel_points(frame0, tracer, 64, rows);
         let (lo, hi) = AUTO_LIGHT_SAMPLES;
         let counts: Vec<u32> = (lo..=hi).collect();
         let errors = crate::reference::twin::direct_relative_error(
