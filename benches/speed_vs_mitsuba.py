@@ -275,9 +275,11 @@ def main(argv=None):
 
     print(f"load average (1 min) before the runs: {os.getloadavg()[0]:.2f}")
     renders = {}
-    for mode in modes:
-        for n in vpls:
-            for rep in range(a.repeat):
+    # Run r of every mode and VPL count before run r + 1 of any: a drift in the machine's
+    # speed (other work on the cores) then weighs on every row alike.
+    for rep in range(a.repeat):
+        for mode in modes:
+            for n in vpls:
                 d, m, first, wall = irad_render(irad, a.out, a.size, frames, n, rep, a.reuse, mode)
                 renders.setdefault((mode[0], n), []).append((d, m, first))
                 how = f"process {wall:.1f} s" if wall is not None else "reused"
