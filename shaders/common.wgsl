@@ -123,6 +123,21 @@ fn gbuffer_x(g: vec4u) -> vec3f {
     return bitcast<vec3f>(g.xyz);
 }
 
+// The surface test of the passes that combine neighbouring samples (interleave filter,
+// compose, temporal accumulation): a sample at xq with normal nq lies on the surface of x
+// with normal n if their normals are within ~25 degrees and xq within `tol` of x's tangent
+// plane, `tol` = surface_tol(x, camera position): 1% of x's distance from the camera.
+const SURFACE_NORMAL_COS: f32 = 0.9;
+const SURFACE_PLANE_REL: f32 = 0.01;
+
+fn surface_tol(x: vec3f, cam: vec3f) -> f32 {
+    return SURFACE_PLANE_REL * distance(x, cam);
+}
+
+fn same_surface(x: vec3f, n: vec3f, tol: f32, xq: vec3f, nq: vec3f) -> bool {
+    return dot(nq, n) >= SURFACE_NORMAL_COS && abs(dot(xq - x, n)) <= tol;
+}
+
 fn srgb_oetf(v: f32) -> f32 {
     if v <= 0.0031308 {
         return 12.92 * v;

@@ -4,7 +4,7 @@
 // the indirect light (gather and interleave filter) was computed once per pixel, on tile 0,
 // without the albedo: a sub-sample takes the irradiance of the pixel's tile-0 sample if that
 // lies on its own surface (normals within ~25 degrees, within 1% of the camera distance of
-// its tangent plane, as the interleave filter's test), else of the nearest of the 8
+// its tangent plane: `same_surface`), else of the nearest of the 8
 // neighbouring pixels' samples that does, else the pixel's own; times its own albedo. It
 // writes that per sub-sample (`indirect_ss`) for the resolve, and leaves the preview to it.
 
@@ -18,17 +18,13 @@
 @group(0) @binding(7) var<storage, read_write> indirect_ss: array<vec4f>;
 @group(0) @binding(8) var<storage, read> surface: array<Surface>;
 
-// The interleave filter's surface test (see interleave.wgsl).
-const NORMAL_COS: f32 = 0.9;
-const PLANE_REL: f32 = 0.01;
-
 // Supersampled: the irradiance (no albedo) for sub-sample `q` at point x with normal n, from
 // the tile-0 samples of its pixel and of the neighbouring pixels.
 fn indirect_of(q: vec2u, x: vec3f, n: vec3f) -> vec3f {
     let s = max(P.aa, 1u);
     let size = vec2i(vec2u(P.width, P.height) / s);
     let px = vec2i(q % vec2u(size));
-    let tol = PLANE_REL * distance(x, P.cam_pos.xyz);
+    let tol = surface_tol(x, P.cam_pos.xyz);
     // The pixel, its 4 edge neighbours, then its corners.
     var order = array<vec2i, 9>(
         vec2i(0, 0), vec2i(1, 0), vec2i(-1, 0), vec2i(0, 1), vec2i(0, -1),
@@ -44,7 +40,7 @@ fn indirect_of(q: vec2u, x: vec3f, n: vec3f) -> vec3f {
         }
         let xc = gbuffer_x(gc);
         let nc = facing(tris[gc.w - 1u].n.xyz, xc, P.cam_pos.xyz);
-        if dot(nc, n) >= NORMAL_COS && abs(dot(xc - x, n)) <= tol {
+        if same_surface(x, n, tol, xc, nc) {
             return indirect[u32(c.y) * P.width + u32(c.x)].xyz;
         }
     }

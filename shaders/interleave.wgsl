@@ -17,12 +17,6 @@
 @group(0) @binding(4) var<storage, read_write> indirect: array<vec4f>;
 @group(0) @binding(5) var<storage, read> surface: array<Surface>;
 
-// Smallest cosine between the normals of pixels filtered together.
-const NORMAL_COS: f32 = 0.9;
-// Largest distance of a neighbour from the pixel's tangent plane, relative to its distance
-// from the camera.
-const PLANE_REL: f32 = 0.01;
-
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     // One read of the parameters into registers (a storage buffer is not hoisted).
@@ -39,7 +33,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
     let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
-    let tol = PLANE_REL * distance(x, p.cam_pos.xyz);
+    let tol = surface_tol(x, p.cam_pos.xyz);
     let side = i32(max(p.interleave, 1u));
     let even = side % 2 == 0;
     let h = side / 2;
@@ -62,7 +56,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             }
             let xq = gbuffer_x(gq);
             let nq = facing(tris[gq.w - 1u].n.xyz, xq, p.cam_pos.xyz);
-            if dot(nq, n) < NORMAL_COS || abs(dot(xq - x, n)) > tol {
+            if !same_surface(x, n, tol, xq, nq) {
                 continue;
             }
             let wx = select(1.0, 0.5, even && abs(dx) == h);

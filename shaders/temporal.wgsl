@@ -6,7 +6,7 @@
 // history's frame count plus one, so a still view averages n independent VPL sets exactly.
 // The history is bilinear over the 4 samples around the reprojected point, each kept only if
 // it lay on the pixel's own surface (normals within ~25 degrees, within 1% of the camera
-// distance of its tangent plane, the interleave filter's test): a disoccluded pixel starts
+// distance of its tangent plane: `same_surface`): a disoccluded pixel starts
 // anew. The CPU gives no history (H.offset.w = 0) unless the triangles and emitter samples
 // are the same bits as last frame's: the light is then the same, only its estimate differs.
 
@@ -34,10 +34,6 @@ struct HistorySample {
 @group(0) @binding(6) var<storage, read_write> output: array<vec4f>;
 @group(0) @binding(7) var<storage, read_write> hist_out: array<HistorySample>;
 
-// The interleave filter's surface test (see interleave.wgsl).
-const NORMAL_COS: f32 = 0.9;
-const PLANE_REL: f32 = 0.01;
-
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     let p = P;
@@ -57,7 +53,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let x = gbuffer_x(g);
     let n = facing(tris[g.w - 1u].n.xyz, x, p.cam_pos.xyz);
-    let tol = PLANE_REL * distance(x, p.cam_pos.xyz);
+    let tol = surface_tol(x, p.cam_pos.xyz);
     var hist = vec3f(0.0);
     var frames = 0.0;
     var wsum = 0.0;
@@ -82,7 +78,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             }
             let xq = gbuffer_x(gq);
             let nq = facing(tris[gq.w - 1u].n.xyz, xq, p.cam_pos.xyz);
-            if dot(nq, n) < NORMAL_COS || abs(dot(xq - x, n)) > tol {
+            if !same_surface(x, n, tol, xq, nq) {
                 continue;
             }
             let h = hist_in[qi].mean;
