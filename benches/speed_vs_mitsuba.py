@@ -8,10 +8,11 @@ What it does:
  2. For each mode (--mode; by default one, every frame alone) and VPL count (256, 1024,
     4096), --repeat times with seeds 1, 2, 3:
     `irad render cornell-orbit --size 256x256 --frames 8..12 --vpls N --seed R+1 --out
-    OUT/vplsN_rR` (a mode with history H renders from frame 8 - H, with its extra arguments,
-    e.g. `acc:8:--accumulate 16`: frames 0..12, the indirect light averaged over frames) then
-    `irad metrics` of frames 8..11 against OUT/reference; irad's relMSE is the mean over the
-    four frames (metrics.json `mean_rel_mse`) and the seeds.
+    OUT/[TAG_]vplsN_rR` (a mode with history H renders from frame 8 - H, with its extra
+    arguments, e.g. `acc:8:--accumulate 16`: frames 0..12, the indirect light averaged over
+    frames) then `irad metrics` of frames 8..11 (linked into OUT/[TAG_]vplsN_rR_measured)
+    against OUT/reference; irad's relMSE is the mean over the four frames (metrics.json
+    `mean_rel_mse`) and the seeds.
  3. Mitsuba's seconds and relMSE per sample count come from mitsuba_cornell.py's CSV
     (--mitsuba-csv; made by running that benchmark if the file is missing).
  4. For each VPL count: Mitsuba's seconds at irad's relMSE, interpolated linearly in
@@ -153,16 +154,18 @@ def irad_render(irad, out, size, frames, vpls, rep, reuse, mode):
     rj = os.path.join(d, "run.json")
     args = ["render", SCENE, "--size", f"{size}x{size}", "--frames", f"{start}..{b}",
             "--vpls", str(vpls), "--seed", str(rep + 1), *extra, "--out", d]
+    # run.json does not keep the command line: the arguments sit beside it, for --reuse.
+    args_file = d + ".args.json"
     wall = None
     done = False
-    if reuse and os.path.exists(rj):
-        r = read_json(rj)
-        done = r.get("argv", args) == args and (
-            r.get("scene") == SCENE and r["gpu"]["width"] == size and r["gpu"]["height"] == size
-            and r["gpu"]["max_vpls"] == vpls
-            and [f["frame"] for f in r["frames"]] == list(range(start, b)))
+    if reuse and os.path.exists(rj) and os.path.exists(args_file):
+        done = read_json(args_file) == args and read_json(rj).get("scene") == SCENE
     if not done:
+        if os.path.exists(args_file):
+            os.remove(args_file)
         wall = run_irad(irad, args, d + ".log")
+        with open(args_file, "w") as f:
+            json.dump(args, f)
     frames_run = read_json(rj)["frames"]
     secs = [f["seconds"] for f in frames_run if f["frame"] >= a]
     if len(secs) < 2:
@@ -170,12 +173,13 @@ def irad_render(irad, out, size, frames, vpls, rep, reuse, mode):
     # The measured frames alone, for `irad metrics` against the reference's.
     measured = d + "_measured"
     os.makedirs(measured, exist_ok=True)
+    for old in os.listdir(measured):  # an earlier run's frames or metrics
+        path = os.path.join(measured, old)
+        if os.path.islink(path) or old in ("metrics.json", "metrics.csv"):
+            os.remove(path)
     for f in range(a, b):
         name = f"frame_{f:04}.exr"
-        link = os.path.join(measured, name)
-        if os.path.lexists(link):
-            os.remove(link)
-        os.symlink(os.path.abspath(os.path.join(d, name)), link)
+        os.symlink(os.path.abspath(os.path.join(d, name)), os.path.join(measured, name))
     # With history frames before A, every measured frame pays the same per-frame work (the
     # first rendered frame's one-off costs fall before A): all of them count.
     marginal = secs if history > 0 else secs[1:]
@@ -251,6 +255,9 @@ def main(argv=None):
     vpls = mitsuba_cornell.parse_list(a.vpls, "vpls")
     frames = parse_frames(a.frames)
     modes = [parse_mode(m) for m in (a.mode or [":0:"])]
+    tags = [m[0] for m in modes]
+    if len(set(tags)) != len(tags):
+        die(f"--mode: each mode needs its own TAG (given: {', '.join(t.rstrip('_') or '(none)' for t in tags)})")
     for tag, history, _ in modes:
         if history > frames[0]:
             die(f"--mode {tag}: {history} history frames before frame {frames[0]}")

@@ -491,7 +491,7 @@ impl Default for Quality {
             pull_levels: 3,
             ism_bias: 1.5,
             // From the scene (`Render::light_samples`): 26 for the Cornell box, 33 for
-            // cornell-light (its light starts near a wall), 24 for two-rooms, 13 for the atrium.
+            // cornell-light (its light starts near a wall), 24 for two-rooms, 14 for the atrium.
             light_samples: 0,
             shadow_size: 256,
             interleave: 4,
@@ -729,23 +729,34 @@ impl Render {
         if self.quality.light_samples > 0 {
             return self.quality.light_samples;
         }
-        let samples = frame0.emitter_samples(self.sequence.seed ^ 0x11647, 256);
+        use crate::scene::SampleKind;
+        let seed = self.sequence.seed ^ 0x11647;
+        // The punctual lights take their slots first (`Frame::emitter_samples`): 256 area
+        // samples after them, so that each of up to 64 strata holds 4 or more.
+        let punctual = |s: &[crate::scene::EmitterSample]| {
+            s.iter().filter(|l| l.kind != SampleKind::Area).count()
+        };
+        let exact = punctual(&frame0.emitter_samples(seed, 256));
+        let samples = frame0.emitter_samples(seed, 256 + exact);
+        let area = samples.iter().any(|l| l.kind == SampleKind::Area);
         let size = &self.sequence.size;
         let rows = (64 * size.height).div_ceil(size.width.max(1)).clamp(1, 256);
         let points = crate::reference::twin::pixel_points(frame0, tracer, 64, rows);
         let (lo, hi) = AUTO_LIGHT_SAMPLES;
-        let counts: Vec<u32> = (lo..=hi).collect();
+        // N samples in all leave N - exact for the area emitters.
+        let counts: Vec<u32> = (lo..=hi).filter(|&n| !area || n as usize > exact).collect();
+        let area_counts: Vec<u32> = counts
+            .iter()
+            .map(|&n| (n as usize).saturating_sub(exact).max(1) as u32)
+            .collect();
         let errors = crate::reference::twin::direct_relative_error(
-            frame0, tracer, &points, &samples, &counts,
+            frame0,
+            tracer,
+            &points,
+            &samples,
+            &area_counts,
         );
         let pairs: Vec<(u32, f32)> = counts.into_iter().zip(errors).collect();
-        let area = samples
-            .iter()
-            .any(|l| l.kind == crate::scene::SampleKind::Area);
-        let exact = samples
-            .iter()
-            .filter(|l| l.kind != crate::scene::SampleKind::Area)
-            .count();
         light_samples_for(&pairs, exact as u32 + area as u32)
     }
 

@@ -393,6 +393,16 @@ impl Renderer {
             )
         });
         let indirect = interleave.as_ref().map_or(&gather.output, |f| &f.output);
+        // The pixels' samples are tile 0's: rows 0..height of the grid.
+        let tile0 = gw as u64 * c.height as u64;
+        if c.accumulate > 1 {
+            check_size(
+                &gpu.limits,
+                &format!("the history of {gw}x{} samples (--accumulate)", c.height),
+                bytes::<super::temporal::HistorySample>(tile0),
+                "lower --size or --aa, or drop --accumulate",
+            )?;
+        }
         let temporal = (c.accumulate > 1).then(|| {
             Temporal::new(
                 &gpu,
@@ -400,7 +410,7 @@ impl Renderer {
                 &tris,
                 &gbuffer.view,
                 indirect,
-                pixels,
+                tile0,
                 c.accumulate,
             )
         });
@@ -852,6 +862,12 @@ impl Renderer {
             Ok::<_, anyhow::Error>((kept, self.read_back(rec, timestamps.as_ref(), components)?))
         })();
         self.timestamps = timestamps;
+        if recorded.is_err() {
+            // This frame's history may not have been written: the next starts anew.
+            if let Some(t) = &mut self.temporal {
+                t.forget();
+            }
+        }
         let (kept, (hdr, ldr, parts, pass_s)) = recorded?;
         reuse.shadow_maps_kept = kept;
         let gpu_s = t_gpu.elapsed().as_secs_f64();

@@ -66,8 +66,9 @@ pub struct Temporal {
 }
 
 impl Temporal {
-    /// The pass over `current` (the gather's or interleave filter's output) for a sub-sample
-    /// grid of `pixels` samples, averaging up to `frames` frames.
+    /// The pass over `current` (the gather's or interleave filter's output, indexed as the
+    /// sub-sample grid) for the first `pixels` samples of the grid (the rows of tile 0),
+    /// averaging up to `frames` frames.
     pub fn new(
         gpu: &Gpu,
         params: &wgpu::Buffer,
@@ -126,6 +127,11 @@ impl Temporal {
             .write_buffer(&self.settings, 0, bytemuck::bytes_of(&h));
         self.last = Some(view_proj);
         valid
+    }
+
+    /// Drops the history: the next frame starts anew (after a frame that failed part-way).
+    pub fn forget(&mut self) {
+        self.last = None;
     }
 
     /// Records the pass over the `width x height` pixels (tile 0 of the grid) and flips the

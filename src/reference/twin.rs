@@ -109,15 +109,17 @@ pub fn direct(
     })
 }
 
-/// How noisy an N-sample estimate of the direct light is over what the camera sees, for each
-/// N of `counts`: at the surface points `points`, the variance of the N-sample estimator of
+/// How noisy an estimate of the direct light with N area samples is over what the camera
+/// sees, for each N of `counts`: at the surface points `points`, the variance of the
+/// N-sample estimator of
 /// the light the area emitters reflect there (luminance of irradiance times albedo, exact
 /// visibility; punctual lights' samples are exact and count only in the mean), summed over the points, over the sum of the squared
 /// mean irradiance: the expected relative squared error of a direct image of N samples.
-/// `samples` must be one call of [`Frame::emitter_samples`], whose area samples are
-/// stratified in the emitter pick: for N samples, consecutive runs of them make up each of
-/// the N strata, and the variance within a run is that stratum's (so the estimate follows the
-/// stratification the renderer's N samples get, not independent draws).
+/// `samples` must be one call of [`Frame::emitter_samples`], whose m area samples are
+/// stratified in the emitter pick: for N samples, stratum g holds the consecutive samples
+/// from floor(g m / N) on, and the variance within it is that stratum's (so the estimate
+/// follows the stratification the renderer's N samples get, not independent draws). Each
+/// stratum needs two samples or more: m >= 2N (a count with fewer gives no variance).
 pub fn direct_relative_error(
     frame: &Frame,
     tracer: &Tracer,
