@@ -26,6 +26,21 @@ impl Hdr {
         self.data[(y * self.width + x) as usize]
     }
 
+    /// The image of `f` applied to this image's and `other`'s pixels pairwise (the same size).
+    pub fn zip_map(&self, other: &Hdr, f: impl Fn(Vec3, Vec3) -> Vec3) -> Hdr {
+        debug_assert_eq!((self.width, self.height), (other.width, other.height));
+        Hdr {
+            width: self.width,
+            height: self.height,
+            data: self
+                .data
+                .iter()
+                .zip(&other.data)
+                .map(|(&a, &b)| f(a, b))
+                .collect(),
+        }
+    }
+
     /// Mean RGB over all pixels.
     pub fn mean(&self) -> Vec3 {
         self.data.iter().copied().sum::<Vec3>() / self.data.len().max(1) as f32

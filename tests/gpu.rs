@@ -82,16 +82,7 @@ fn compare(name: &str, a: &Hdr, b: &Hdr, bound: f32) -> f32 {
             .unwrap();
         b.write_png(&dir.join(format!("{name}-cpu.png")), 1.0)
             .unwrap();
-        let d = Hdr {
-            width: a.width,
-            height: a.height,
-            data: a
-                .data
-                .iter()
-                .zip(&b.data)
-                .map(|(&x, &y)| (x - y).abs() * 4.0)
-                .collect(),
-        };
+        let d = a.zip_map(b, |x, y| (x - y).abs() * 4.0);
         d.write_png(&dir.join(format!("{name}-diff.png")), 1.0)
             .unwrap();
         println!("images written to {}", dir.display());

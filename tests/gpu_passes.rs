@@ -263,16 +263,7 @@ fn window(x: u32, y: u32, n: u32) -> Vec<(usize, f32)> {
 fn write_diff(name: &str, a: &irad::image::Hdr, b: &irad::image::Hdr) {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
     std::fs::create_dir_all(&dir).unwrap();
-    let diff = irad::image::Hdr {
-        width: a.width,
-        height: a.height,
-        data: a
-            .data
-            .iter()
-            .zip(&b.data)
-            .map(|(p, q)| (*p - *q).abs())
-            .collect(),
-    };
+    let diff = a.zip_map(b, |p, q| (p - q).abs());
     a.write_exr(&dir.join("actual.exr")).unwrap();
     b.write_exr(&dir.join("expected.exr")).unwrap();
     diff.write_exr(&dir.join("difference.exr")).unwrap();

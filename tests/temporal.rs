@@ -77,16 +77,7 @@ fn output_dir() -> PathBuf {
 /// Writes `a`, `b` and |a - b| under target/tmp/test-output as `name-*.exr`.
 fn write_images(name: &str, a: &Hdr, b: &Hdr) {
     let dir = output_dir();
-    let diff = Hdr {
-        width: a.width,
-        height: a.height,
-        data: a
-            .data
-            .iter()
-            .zip(&b.data)
-            .map(|(&x, &y)| (x - y).abs())
-            .collect(),
-    };
+    let diff = a.zip_map(b, |x, y| (x - y).abs());
     a.write_exr(&dir.join(format!("{name}-actual.exr")))
         .unwrap();
     b.write_exr(&dir.join(format!("{name}-expected.exr")))

@@ -160,16 +160,7 @@ fn half(plan: &Plan, h: usize, spp: u32, tick: &(dyn Fn() + Sync)) -> Result<Vec
 /// The spp-weighted mean of two halves.
 pub fn mean_of_halves(a: &Hdr, b: &Hdr, spp: [u32; 2]) -> Hdr {
     let (wa, wb) = (spp[0] as f32, spp[1] as f32);
-    Hdr {
-        width: a.width,
-        height: a.height,
-        data: a
-            .data
-            .iter()
-            .zip(&b.data)
-            .map(|(x, y)| (*x * wa + *y * wb) / (wa + wb))
-            .collect(),
-    }
+    a.zip_map(b, |x, y| (x * wa + y * wb) / (wa + wb))
 }
 
 /// The reference frames of the plan and their halves, from the cache where present, else
