@@ -685,7 +685,8 @@ impl Renderer {
         Ok((changed, reuse))
     }
 
-    /// Records the frame's passes in order; each names what it reads and writes. Returns
+    /// Records the frame's passes in order; each names what it reads and writes. `view_proj`
+    /// is the G-buffer's camera, `(near, far)` the ISMs' and hemicubes' depth range. Returns
     /// whether the shadow maps were kept.
     fn encode_passes(
         &mut self,
@@ -693,15 +694,14 @@ impl Renderer {
         input: &GpuFrame,
         changed_slots: u32,
         geometry_kept: bool,
-        (near, far, cam_far): (f32, f32, f32),
+        (near, far, view_proj): (f32, f32, glam::Mat4),
     ) -> Result<bool> {
-        let (f, c) = (input.frame, self.config.clone());
+        let c = self.config.clone();
         let count = (self.tri_count * 3) as u32;
         // The passes up to compose run on the sub-sample grid (aa x aa tiles of the output
         // size, each sampling every pixel at one offset; the output itself with aa = 1).
         let (gw, gh) = c.grid();
         // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample.
-        let view_proj = camera_view_proj(f, &c, cam_far);
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
         rec.end_pass()?;
@@ -856,7 +856,7 @@ impl Renderer {
         let (gpu, timestamps) = (self.gpu.clone(), self.timestamps.take());
         let recorded = (|| {
             let mut rec = Recorder::new(&gpu, self.profiling, timestamps.as_ref());
-            let ranges = (near, far, cam_far);
+            let ranges = (near, far, view_proj);
             let slots = changed.len() as u32;
             let kept = self.encode_passes(&mut rec, input, slots, reuse.geometry_kept, ranges)?;
             Ok::<_, anyhow::Error>((kept, self.read_back(rec, timestamps.as_ref(), components)?))
