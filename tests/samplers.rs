@@ -55,6 +55,22 @@ impl Estimates {
     fn se_of_difference(&self, other: &Estimates, k: usize) -> f64 {
         (self.se[k].powi(2) + other.se[k].powi(2)).sqrt()
     }
+
+    /// Asserts that quadrant `k`'s mean (sampler `name`) matches `uniform`'s: z < 4, a
+    /// statistical bound (|z| > 4 happens with probability 6e-5), not fitted to measurements.
+    fn assert_matches(&self, name: &str, uniform: &Estimates, k: usize) {
+        let z = (self.mean[k] - uniform.mean[k]).abs() / self.se_of_difference(uniform, k);
+        println!(
+            "quadrant {k}: {name} {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
+            self.mean[k], self.se[k], uniform.mean[k], uniform.se[k]
+        );
+        assert!(
+            z < 4.0,
+            "{name} quadrant {k}: {} vs uniform {} (z = {z})",
+            self.mean[k],
+            uniform.mean[k]
+        );
+    }
 }
 
 /// Mean and standard error of per-frame estimates; with `batches`, by batch means (for
@@ -165,19 +181,8 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
             ("mh rate 0.1", &lazy),
             ("smc rate 0.1", &smc),
         ] {
-            let z = (e.mean[k] - uniform.mean[k]).abs() / e.se_of_difference(&uniform, k);
-            println!(
-                "quadrant {k}: {name} {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
-                e.mean[k], e.se[k], uniform.mean[k], uniform.se[k]
-            );
-            // Measured: z at most 1.51 (mh escape 8, quadrant 3), 0.94 for cdf. The bound is
-            // statistical (|z| > 4 happens with probability 6e-5), not fitted to these values.
-            assert!(
-                z < 4.0,
-                "{name} quadrant {k}: {} vs uniform {} (z = {z})",
-                e.mean[k],
-                uniform.mean[k]
-            );
+            // Measured: z at most 1.51 (mh escape 8, quadrant 3), 0.94 for cdf.
+            e.assert_matches(name, &uniform, k);
         }
         // The test has the power to see a wrong weight: one 30% too low (leaving out M/P
         // would be a factor of about 2.4) falls far outside the bound.
@@ -491,17 +496,7 @@ fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
     println!("particles born in frame 0: {old:.3}");
     assert!(old > 0.4, "most particles are old: {old}");
     for k in 0..4 {
-        let z = (smc.mean[k] - uniform.mean[k]).abs() / smc.se_of_difference(&uniform, k);
-        println!(
-            "quadrant {k}: smc {:.5} +- {:.5}, uniform {:.5} +- {:.5}, z = {z:.2}",
-            smc.mean[k], smc.se[k], uniform.mean[k], uniform.se[k]
-        );
-        assert!(
-            z < 4.0,
-            "quadrant {k}: smc {} vs uniform {} (z = {z})",
-            smc.mean[k],
-            uniform.mean[k]
-        );
+        smc.assert_matches("smc", &uniform, k);
     }
     // The whole image: the power to see a 7% error (what particles of one vertex each, drawn
     // in frame 0, lost by frame 12: their paths' later vertices that did not exist in frame 0).
