@@ -718,13 +718,15 @@ impl Render {
         }
     }
 
-    /// Emitter samples for the sequence: `--light-samples`, or (0) from the scene at frame 0
-    /// (`frame0`, traced by `tracer`) as the camera sees it at 64 pixel centres across (in the
-    /// image's aspect), by [`light_samples_for`].
+    /// Emitter samples for the sequence: `--light-samples` (checked against the adapter by
+    /// the renderer), or (0) from the scene at frame 0 (`frame0`, traced by `tracer`) as the
+    /// camera sees it at 64 pixel centres across (in the image's aspect), by
+    /// [`light_samples_for`], at most `most` (what the adapter can hold).
     pub fn light_samples(
         &self,
         frame0: &crate::scene::Frame,
         tracer: &crate::trace::Tracer,
+        most: u32,
     ) -> u32 {
         if self.quality.light_samples > 0 {
             return self.quality.light_samples;
@@ -757,7 +759,7 @@ impl Render {
             &area_counts,
         );
         let pairs: Vec<(u32, f32)> = counts.into_iter().zip(errors).collect();
-        light_samples_for(&pairs, exact as u32 + area as u32)
+        light_samples_for(&pairs, exact as u32 + area as u32).min(most)
     }
 
     /// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
@@ -1360,10 +1362,12 @@ mod tests {
         let tracer = crate::trace::Tracer::new(&f);
         let mut r = Render::default();
         r.quality.light_samples = 12;
-        assert_eq!(r.light_samples(&f, &tracer), 12);
+        assert_eq!(r.light_samples(&f, &tracer, 8), 12);
         r.quality.light_samples = 0;
-        let n = r.light_samples(&f, &tracer);
+        let n = r.light_samples(&f, &tracer, 409);
         assert!((26..=34).contains(&n), "the Cornell box chose {n}");
+        // The adapter's limit caps the choice.
+        assert_eq!(r.light_samples(&f, &tracer, 8), 8);
     }
 
     #[test]

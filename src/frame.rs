@@ -53,14 +53,9 @@ impl Pipeline {
         let frame0 = scene.at(0.0);
         let tracer = Tracer::new(&frame0);
         let mut rc = cfg.renderer_config(frame0.tris.len());
-        // Chosen from the scene (--light-samples 0) within the adapter's shadow layers (5 a
-        // sample); a count the flag names is checked against them by the renderer.
-        rc.light_samples = if cfg.quality.light_samples == 0 {
-            let most = (gpu.limits.max_texture_array_layers / 5).max(1);
-            cfg.light_samples(&frame0, &tracer).min(most)
-        } else {
-            cfg.quality.light_samples
-        };
+        // Within the adapter's shadow layers, 5 a sample.
+        let most = (gpu.limits.max_texture_array_layers / 5).max(1);
+        rc.light_samples = cfg.light_samples(&frame0, &tracer, most);
         let mut renderer = Renderer::new(gpu, rc, &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;
