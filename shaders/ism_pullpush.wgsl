@@ -3,6 +3,8 @@
 // hole. `decode` turns the splat atlas into level 0; `pull` averages the valid children into
 // the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
+// Tiles of at most 64 texels a side take `fused` instead: all of it in one dispatch, the
+// coarser levels in workgroup memory (the same values; `src/gpu/ism.rs` has the CPU twin).
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
 
 @group(0) @binding(0) var<storage, read> P: Params;
@@ -26,8 +28,7 @@ fn decode(@builtin(global_invocation_id) gid: vec3u) {
         return;
     }
     let t = slots[i / per_tile].x * per_tile + i % per_tile;
-    let e = atlas[t];
-    pyramid[t] = select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
+    pyramid[t] = decoded(atlas[t]);
 }
 
 // One invocation per texel of the coarser level `L.size / 2`.
@@ -44,18 +45,8 @@ fn pull(@builtin(global_invocation_id) gid: vec3u) {
     let x = (k % half) * 2u;
     let y = (k / half) * 2u;
     let base = L.offset + tile * L.size * L.size;
-    var sum = 0.0;
-    var count = 0.0;
-    for (var dy = 0u; dy < 2u; dy++) {
-        for (var dx = 0u; dx < 2u; dx++) {
-            let v = pyramid[base + (y + dy) * L.size + x + dx];
-            if v >= 0.0 {
-                sum += ism_depth(v);
-                count += 1.0;
-            }
-        }
-    }
-    pyramid[L.parent_offset + tile * per_tile + k] = select(-1.0, sum / max(count, 1.0) + 4.0 * f32(L.level + 1u), count > 0.0);
+    let at = base + y * L.size + x;
+    pyramid[L.parent_offset + tile * per_tile + k] = pulled(pyramid[at], pyramid[at + 1u], pyramid[at + L.size], pyramid[at + L.size + 1u], L.level + 1u);
 }
 
 // One invocation per texel of level `L.size`.
@@ -75,4 +66,94 @@ fn push(@builtin(global_invocation_id) gid: vec3u) {
     let half = L.size / 2u;
     let parent = L.parent_offset + tile * half * half + ((k / L.size) / 2u) * half + (k % L.size) / 2u;
     pyramid[at] = pyramid[parent];
+}
+
+// The fused pull-push for tiles of at most FUSED_MAX texels a side: one workgroup per redrawn
+// tile (k = workgroup id), its coarser levels (1, 2, ...) in workgroup memory, level 0 written
+// straight from the atlas. The same operations in the same order as decode, pull and push, so
+// the same level 0, the only level the gather reads; no pass over the whole pyramid between
+// levels, and one dispatch instead of 2 levels + 1.
+const FUSED_MAX: u32 = 64u;
+// Levels 1 to 5 of a 64-texel tile: 32^2 + 16^2 + 8^2 + 4^2 + 2^2 values.
+var<workgroup> up: array<f32, 1364>;
+
+fn decoded(e: u32) -> f32 {
+    return select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
+}
+
+// The mean depth of the valid ones of four values as a value of level `level`, or a hole.
+fn pulled(a: f32, b: f32, c: f32, d: f32, level: u32) -> f32 {
+    var v = array<f32, 4>(a, b, c, d);
+    var sum = 0.0;
+    var count = 0.0;
+    for (var j = 0u; j < 4u; j++) {
+        if v[j] >= 0.0 {
+            sum += ism_depth(v[j]);
+            count += 1.0;
+        }
+    }
+    return select(-1.0, sum / max(count, 1.0) + 4.0 * f32(level), count > 0.0);
+}
+
+// Where level l >= 1 of the tile starts in `up`.
+fn up_offset(size: u32, l: u32) -> u32 {
+    var o = 0u;
+    for (var k = 1u; k < l; k++) {
+        o += (size >> k) * (size >> k);
+    }
+    return o;
+}
+
+@compute @workgroup_size(64)
+fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: u32) {
+    let size = P.ism_size;
+    let k = wid.x + wid.y * 65535u;
+    if k >= P.num_changed || size > FUSED_MAX {
+        return;
+    }
+    let levels = min(P.pull_levels, countTrailingZeros(size) - 1u);
+    let base = slots[k].x * size * size;
+    if levels > 0u {
+        // Pull level 0 (the decoded atlas) into level 1.
+        let h = size / 2u;
+        for (var b = t; b < h * h; b += 64u) {
+            let at = base + (b / h) * 2u * size + (b % h) * 2u;
+            up[b] = pulled(decoded(atlas[at]), decoded(atlas[at + 1u]), decoded(atlas[at + size]), decoded(atlas[at + size + 1u]), 1u);
+        }
+    }
+    // Pull level l into l + 1.
+    for (var l = 1u; l < levels; l++) {
+        workgroupBarrier();
+        let s = size >> l;
+        let h = s / 2u;
+        let src = up_offset(size, l);
+        let dst = up_offset(size, l + 1u);
+        for (var b = t; b < h * h; b += 64u) {
+            let at = src + (b / h) * 2u * s + (b % h) * 2u;
+            up[dst + b] = pulled(up[at], up[at + 1u], up[at + s], up[at + s + 1u], l + 1u);
+        }
+    }
+    // Push: fill the holes of level l from level l + 1, coarsest first.
+    for (var l = levels - 1u; l >= 1u && l < levels; l--) {
+        workgroupBarrier();
+        let s = size >> l;
+        let h = s / 2u;
+        let at = up_offset(size, l);
+        let parent = up_offset(size, l + 1u);
+        for (var i = t; i < s * s; i += 64u) {
+            if up[at + i] < 0.0 {
+                up[at + i] = up[parent + ((i / s) / 2u) * h + (i % s) / 2u];
+            }
+        }
+    }
+    workgroupBarrier();
+    // Level 0: the decoded atlas, its holes filled from level 1.
+    let h = size / 2u;
+    for (var i = t; i < size * size; i += 64u) {
+        var v = decoded(atlas[base + i]);
+        if v < 0.0 && levels > 0u {
+            v = up[((i / size) / 2u) * h + (i % size) / 2u];
+        }
+        pyramid[base + i] = v;
+    }
 }

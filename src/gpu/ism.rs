@@ -200,9 +200,12 @@ pub struct Ism {
     decode: wgpu::ComputePipeline,
     pull: wgpu::ComputePipeline,
     push: wgpu::ComputePipeline,
+    fused: wgpu::ComputePipeline,
     splat_group: wgpu::BindGroup,
     pp_group: wgpu::BindGroup,
     level_groups: Vec<wgpu::BindGroup>,
+    /// What the splat writes: one tile of inverted depths (0: empty) a slot.
+    pub atlas: wgpu::Buffer,
     /// Level 0 of the pyramid is the filled atlas the gather reads.
     pub pyramid: wgpu::Buffer,
     size: u32,
@@ -270,6 +273,7 @@ impl Ism {
         let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[l_pp, l_level]);
         let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[l_pp, l_level]);
         let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[l_pp, l_level]);
+        let fused = gpu.compute_pipeline("ism pull-push", &m_pp, "fused", &[l_pp, l_level]);
         let pp_group = PULL_PUSH.groups[0].bind(
             gpu,
             PULL_PUSH.name,
@@ -304,9 +308,11 @@ impl Ism {
             decode,
             pull,
             push,
+            fused,
             splat_group,
             pp_group,
             level_groups,
+            atlas,
             pyramid,
             size,
             levels,
@@ -339,9 +345,21 @@ impl Ism {
     }
 
     /// Decodes the redrawn tiles of the atlas into the pyramid and fills their holes by
-    /// pull-push.
+    /// pull-push: in one dispatch (a workgroup a tile, `fused`) for tiles of at most
+    /// [`FUSED_MAX`] texels a side, else a dispatch per level over the pyramid.
     pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, changed: u32) {
         if changed == 0 {
+            return;
+        }
+        if self.size <= FUSED_MAX {
+            let x = changed.min(65535);
+            dispatch(
+                enc,
+                "ism pull-push",
+                &self.fused,
+                &[&self.pp_group, &self.level_groups[0]],
+                (x, changed.div_ceil(x), 1),
+            );
             return;
         }
         let texels = |l: u32| changed as u64 * ((self.size >> l) as u64).pow(2);
@@ -373,6 +391,136 @@ impl Ism {
                 &[&self.pp_group, &self.level_groups[l as usize]],
                 g(texels(l)),
             );
+        }
+    }
+}
+
+/// The largest tile side `shaders/ism_pullpush.wgsl`'s `fused` takes (its workgroup memory
+/// holds the coarser levels of one tile).
+pub const FUSED_MAX: u32 = 64;
+
+/// CPU twin of the pull-push: level 0 of one tile of side `size` from its atlas texels
+/// (inverted depths, 0: empty), holes filled from up to `levels` coarser levels; a value is
+/// `depth + 4 * level`, -1 a hole left open.
+pub fn pull_push(atlas: &[u32], size: u32, levels: u32) -> Vec<f32> {
+    let levels = levels.min(size.trailing_zeros().saturating_sub(1));
+    let decoded = |e: u32| {
+        if e == 0 {
+            -1.0
+        } else {
+            (16777216 - e) as f32 / 16777215.0
+        }
+    };
+    let depth = |v: f32| v - 4.0 * (v * 0.25).floor();
+    let mut pyramid = vec![atlas.iter().map(|&e| decoded(e)).collect::<Vec<f32>>()];
+    for l in 0..levels {
+        let (s, h) = ((size >> l) as usize, (size >> (l + 1)) as usize);
+        let below = &pyramid[l as usize];
+        let up = (0..h * h)
+            .map(|k| {
+                let at = (k / h) * 2 * s + (k % h) * 2;
+                let (mut sum, mut count) = (0.0f32, 0.0f32);
+                for v in [below[at], below[at + 1], below[at + s], below[at + s + 1]] {
+                    if v >= 0.0 {
+                        sum += depth(v);
+                        count += 1.0;
+                    }
+                }
+                if count > 0.0 {
+                    sum / count + 4.0 * (l + 1) as f32
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        pyramid.push(up);
+    }
+    for l in (0..levels as usize).rev() {
+        let (s, h) = ((size >> l) as usize, (size >> (l + 1)) as usize);
+        let (fine, coarse) = pyramid.split_at_mut(l + 1);
+        for (i, v) in fine[l].iter_mut().enumerate() {
+            if *v < 0.0 {
+                *v = coarse[0][(i / s) / 2 * h + (i % s) / 2];
+            }
+        }
+    }
+    pyramid.swap_remove(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::BackendChoice;
+    use rand::Rng;
+
+    /// Both GPU paths (fused for 64, per level for 128) fill the same tiles as the CPU twin,
+    /// on atlases from full to almost empty, for a subset of the slots (the others keep
+    /// their tiles).
+    #[test]
+    fn the_gpu_pull_push_matches_its_cpu_twin() {
+        let gpu = match Gpu::new(BackendChoice::Auto) {
+            Ok(g) => g,
+            Err(e) => return println!("no GPU adapter, pull-push test skipped: {e}"),
+        };
+        let mut r = crate::math::rng(&[5, 0x9911]);
+        for (size, levels, slots) in [(64u32, 3u32, 6u32), (16, 5, 3), (8, 0, 2), (128, 3, 3)] {
+            let per_tile = (size * size) as usize;
+            // Each tile its own density of points: 0.5 to 90% of texels hit.
+            let atlas: Vec<u32> = (0..slots as usize * per_tile)
+                .map(|i| {
+                    let density = [0.9, 0.2, 0.05, 0.005][(i / per_tile) % 4];
+                    if r.random::<f64>() < density {
+                        r.random_range(1..=16777216u32)
+                    } else {
+                        0
+                    }
+                })
+                .collect();
+            let changed: Vec<[u32; 2]> = (0..slots).rev().step_by(2).map(|s| [s, 0]).collect();
+            let params = Params {
+                ism_size: size,
+                pull_levels: levels,
+                num_changed: changed.len() as u32,
+                ..bytemuck::Zeroable::zeroed()
+            };
+            let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+            let buffer = |label, data: &[u8]| {
+                let b = gpu.buffer(label, data.len().max(16) as u64, storage);
+                gpu.queue.write_buffer(&b, 0, data);
+                b
+            };
+            let p = buffer("params", bytemuck::bytes_of(&params));
+            let empty = buffer("unused", &[0u8; 1024]);
+            let s = buffer("slots", bytemuck::cast_slice(&changed));
+            let ism = Ism::new(&gpu, &p, &empty, &empty, &empty, &s, slots, size, levels);
+            gpu.queue
+                .write_buffer(&ism.atlas, 0, bytemuck::cast_slice(&atlas));
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            ism.encode_pull_push(&mut enc, changed.len() as u32);
+            gpu.queue.submit([enc.finish()]);
+            let bytes = gpu
+                .read_buffer(&ism.pyramid, atlas_bytes(slots, size))
+                .unwrap();
+            let got: &[f32] = bytemuck::cast_slice(&bytes);
+            for tile in 0..slots as usize {
+                let range = tile * per_tile..(tile + 1) * per_tile;
+                let redone = changed.iter().any(|c| c[0] as usize == tile);
+                let want = if redone {
+                    pull_push(&atlas[range.clone()], size, levels)
+                } else {
+                    vec![0.0; per_tile] // never written: the buffer's zeros
+                };
+                for (i, (g, w)) in got[range].iter().zip(&want).enumerate() {
+                    assert!(
+                        (g - w).abs() <= 1e-6 * w.abs().max(1.0),
+                        "size {size}, levels {levels}, tile {tile}, texel {i}: GPU {g}, CPU {w}"
+                    );
+                }
+                if redone {
+                    let holes = want.iter().filter(|&&v| v < 0.0).count();
+                    println!("size {size}, levels {levels}, tile {tile}: {holes} holes left");
+                }
+            }
         }
     }
 }
