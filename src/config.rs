@@ -441,7 +441,9 @@ pub struct Quality {
     /// ISM tile side in texels (a power of two, 8 to 1024)
     #[arg(long, default_value_t = Quality::default().ism_size, allow_hyphen_values = true)]
     pub ism_size: u32,
-    /// Points each VPL splats into its ISM
+    /// Points of the scene's point set each VPL splats into its ISM (besides its ray-cast
+    /// near-field points); 0: from the scene, enough that the points a VPL sees close its tile
+    /// at pull-push's coarsest level (see `ism_points_for`), 64 to 4096
     #[arg(long, default_value_t = Quality::default().ism_points, allow_hyphen_values = true)]
     pub ism_points: u32,
     /// Pull-push levels of the ISMs (holes up to 2^levels texels are filled; at most log2 of --ism-size)
@@ -459,7 +461,8 @@ pub struct Quality {
     #[arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true)]
     pub shadow_size: u32,
     /// Interleaved gather: each pixel of an NxN block gathers every (N^2)-th VPL, then a
-    /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all)
+    /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all;
+    /// 0: from the VPL count, 8 from 4096 VPLs, else 4; see `interleave_for`)
     #[arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true)]
     pub interleave: u32,
     /// Anti-aliasing: S x S sub-samples per pixel, box-filtered into the pixel (the
@@ -487,14 +490,17 @@ impl Default for Quality {
     fn default() -> Self {
         Quality {
             ism_size: 64,
-            ism_points: 4096,
+            // From the scene (`Render::ism_points`): 464 for the Cornell box (its VPLs see
+            // 42% of its area), 4002 for the atrium (128k triangles).
+            ism_points: 0,
             pull_levels: 3,
             ism_bias: 1.5,
             // From the scene (`Render::light_samples`): 26 for the Cornell box, 33 for
             // cornell-light (its light starts near a wall), 24 for two-rooms, 14 for the atrium.
             light_samples: 0,
             shadow_size: 256,
-            interleave: 4,
+            // From the VPL count (`interleave_for`): 4, or 8 from 4096 VPLs.
+            interleave: 0,
             // 2x2 sub-samples: measured on the Cornell box at 128x128 (README, "Pixels"),
             // the mean luminance goes from +6.9% of the reference's to +0.9% for +20% of the
             // frame's time; 3x3 and 4x4 cost 2.2x and 3.1x.
@@ -535,6 +541,51 @@ pub fn light_samples_for(errors: &[(u32, f32)], exact: u32) -> u32 {
     n.clamp(lo, hi).max(exact)
 }
 
+/// `--interleave 0`'s block side for `vpls` VPLs: 8 from 4096 VPLs (each pixel still gathers
+/// 64), else 4. Measured on `cornell-orbit` at 256x256 (README, "Speed against Mitsuba 3"):
+/// frames alone, 8 against 4 raises relMSE 9% at 256 VPLs and 8% at 1024 but 2% at 4096,
+/// where it takes the gather from 320 ms to 70 ms a frame on lavapipe.
+pub fn interleave_for(vpls: u32) -> u32 {
+    if vpls >= 4096 {
+        8
+    } else {
+        4
+    }
+}
+
+/// The range of `--ism-points 0`'s choice.
+pub const AUTO_ISM_POINTS: (u32, u32) = (64, 4096);
+
+/// Points a VPL splats for tiles of `ism_size` texels whose holes `pull_levels` levels of
+/// pull-push fill, in a scene of `triangles` triangles of whose surface area a VPL sees the
+/// fraction `seen` (in front of it, unoccluded; `ism::seen_fraction`), the larger of:
+/// - coverage: enough that the points it sees alone fall in every texel of the tile's disk
+///   at the coarsest level, n ln n of them for its n texels (the coupon collector's
+///   expectation), so that pull-push closes the tile without the near-field points (64
+///   texels and 3 levels: 197 / `seen`);
+/// - detail: one for every [`TRIANGLES_PER_ISM_POINT`] triangles. Geometry finer than the
+///   near-field rays' cells (a column, a lamp) is in a tile only through points of the set.
+///   Measured: on the atrium (128k triangles, 256 VPLs) relMSE against the path tracer falls
+///   from 0.093 at 823 points to 0.087 at 4096, and at 1024 VPLs from 0.053 at 1001 to 0.050;
+///   on the Cornell box (36) it stays within 1% from 64 to 4096 points, where the near-field
+///   points carry its few large surfaces.
+///
+/// Within [`AUTO_ISM_POINTS`].
+pub fn ism_points_for(ism_size: u32, pull_levels: u32, seen: f32, triangles: usize) -> u32 {
+    let levels = pull_levels.min(ism_size.trailing_zeros().saturating_sub(1));
+    let side = (ism_size >> levels) as f32;
+    let n = (std::f32::consts::FRAC_PI_4 * side * side).max(1.0);
+    let coverage = (n * n.ln().max(1.0) / seen.max(1e-3)).ceil() as u32;
+    let detail = triangles
+        .div_ceil(TRIANGLES_PER_ISM_POINT)
+        .min(u32::MAX as usize) as u32;
+    let (lo, hi) = AUTO_ISM_POINTS;
+    coverage.max(detail).clamp(lo, hi)
+}
+
+/// `--ism-points 0`'s detail term: a point a slot for every this many triangles.
+pub const TRIANGLES_PER_ISM_POINT: usize = 32;
+
 /// Points in the ISM point set of a scene of `triangles` triangles for `points_per_vpl` points
 /// a slot: 16 slots' worth or one a triangle, whichever is more (a point set smaller than the
 /// triangle count leaves small triangles, a column's facets, with no point in any tile),
@@ -556,7 +607,7 @@ impl Quality {
             );
         }
         // The splat dispatches one invocation per point in x: 65535 groups of 64.
-        check::int("--ism-points", self.ism_points, 1, 65535 * 64)?;
+        check::int("--ism-points", self.ism_points, 0, 65535 * 64)?;
         check::int(
             "--pull-levels",
             self.pull_levels,
@@ -566,7 +617,7 @@ impl Quality {
         check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
         check::int("--light-samples", self.light_samples, 0, 4096)?;
         check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
-        check::int("--interleave", self.interleave, 1, 8)?;
+        check::int("--interleave", self.interleave, 0, 8)?;
         check::int("--aa", self.aa, 1, 8)?;
         check::int("--edge-rays", self.edge_rays, 0, 32)?;
         check::int("--compensate", self.compensate, 0, 256)?;
@@ -695,8 +746,10 @@ impl Render {
             height: self.sequence.size.height,
             max_vpls: self.vpls,
             ism_size: q.ism_size,
-            points_per_vpl: q.ism_points,
-            num_points: ism_point_set_size(q.ism_points, triangles),
+            // From the scene: the pipeline chooses (`Render::ism_points`); the most it can
+            // choose stand in for the checks before.
+            points_per_vpl: self.ism_points_or(AUTO_ISM_POINTS.1),
+            num_points: ism_point_set_size(self.ism_points_or(AUTO_ISM_POINTS.1), triangles),
             pull_levels: q.pull_levels,
             ism_bias: q.ism_bias,
             // From the scene: the pipeline chooses (`Render::light_samples`, within the
@@ -707,7 +760,10 @@ impl Render {
                 q.light_samples
             },
             shadow_size: q.shadow_size,
-            interleave: q.interleave,
+            interleave: match q.interleave {
+                0 => interleave_for(self.vpls),
+                n => n,
+            },
             aa: q.aa,
             edge_rays: q.edge_rays,
             compensate: q.compensate,
@@ -716,6 +772,26 @@ impl Render {
             exposure: self.exposure,
             seed: self.sequence.seed,
         }
+    }
+
+    /// `--ism-points`, or `auto` where it is 0 (from the scene).
+    fn ism_points_or(&self, auto: u32) -> u32 {
+        match self.quality.ism_points {
+            0 => auto,
+            n => n,
+        }
+    }
+
+    /// Points a VPL splats: `--ism-points`, or (0) from the scene at frame 0 (`frame0`,
+    /// traced by `tracer`) by [`ism_points_for`] from the fraction of its area a VPL sees and
+    /// its triangles.
+    pub fn ism_points(&self, frame0: &crate::scene::Frame, tracer: &crate::trace::Tracer) -> u32 {
+        if self.quality.ism_points > 0 {
+            return self.quality.ism_points;
+        }
+        let seen = crate::gpu::ism::seen_fraction(frame0, tracer, self.sequence.seed);
+        let q = &self.quality;
+        ism_points_for(q.ism_size, q.pull_levels, seen, frame0.tris.len())
     }
 
     /// Emitter samples for the sequence: `--light-samples` (checked against the adapter by
@@ -1371,6 +1447,53 @@ mod tests {
     }
 
     #[test]
+    fn ism_points_follow_what_a_vpl_sees() {
+        // 64 texels, 3 levels: the 8x8 coarsest level's disk, n = 16 pi = 50.3 texels, needs
+        // n ln n = 197 points seen; a VPL that sees a tenth of the scene splats 10 times that.
+        assert_eq!(ism_points_for(64, 3, 1.0, 36), 197);
+        assert_eq!(ism_points_for(64, 3, 0.1, 36), 1970);
+        // Many triangles: one point for every 32 of them, where that is more.
+        assert_eq!(ism_points_for(64, 3, 0.24, 128_060), 4002);
+        assert_eq!(ism_points_for(64, 3, 0.1, 32_000), 1970);
+        // Fewer levels: a finer coarsest level (16x16 of 64: 201 texels, 201 ln 201 = 1066.4; or
+        // 8x8 with none of 8).
+        assert_eq!(ism_points_for(64, 2, 1.0, 36), 1067);
+        assert_eq!(ism_points_for(8, 0, 1.0, 36), 197);
+        // Bounded both ways (2x2 at the coarsest level needs no more than the fewest).
+        assert_eq!(ism_points_for(8, 3, 1.0, 36), 64);
+        assert_eq!(ism_points_for(64, 3, 0.0, 36), 4096);
+        assert_eq!(ism_points_for(64, 3, 1.0, 1 << 20), 4096);
+        // What a VPL sees: inside an empty cube, the 5 faces other than its own (5/6 of the
+        // area; 4096 pairs: standard error 0.006).
+        let seen = |name: &str| {
+            let scene = crate::scene::builtin::load(name).unwrap().unwrap();
+            let f = scene.at(0.0);
+            crate::gpu::ism::seen_fraction(&f, &crate::trace::Tracer::new(&f), 1)
+        };
+        let furnace = seen("furnace");
+        assert!((furnace - 5.0 / 6.0).abs() < 0.025, "furnace: {furnace}");
+        // The Cornell box's two blocks, large for its room, hide much of it (measured 0.42),
+        // the atrium's columns and gallery more (0.24): a tracer that missed occluders
+        // would give them the furnace's.
+        let (cornell, atrium) = (seen("cornell"), seen("atrium"));
+        println!("seen: furnace {furnace}, cornell {cornell}, atrium {atrium}");
+        assert!(cornell < furnace - 0.25, "cornell: {cornell}");
+        assert!(atrium < cornell - 0.1, "atrium: {atrium}");
+        // An explicit --ism-points is kept; 0 chooses from the scene.
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let tracer = crate::trace::Tracer::new(&f);
+        let mut r = Render::default();
+        r.quality.ism_points = 1000;
+        assert_eq!(r.ism_points(&f, &tracer), 1000);
+        r.quality.ism_points = 0;
+        assert_eq!(
+            r.ism_points(&f, &tracer),
+            ism_points_for(64, 3, seen("cornell"), 36)
+        );
+    }
+
+    #[test]
     fn the_ism_point_set_grows_with_the_triangles() {
         // The Cornell box (36 triangles) keeps 16 slots' worth of the default 4096 points.
         assert_eq!(ism_point_set_size(4096, 36), 1 << 16);
@@ -1413,19 +1536,26 @@ mod tests {
 
     #[test]
     fn interleave_out_of_range_names_the_flag() {
-        for bad in [0, 9] {
+        for bad in [9, 64] {
             let q = Quality {
                 interleave: bad,
                 ..Quality::default()
             };
             let e = q.validate().unwrap_err().to_string();
-            assert!(e.contains("--interleave") && e.contains("1 to 8"), "{e}");
+            assert!(e.contains("--interleave") && e.contains("0 to 8"), "{e}");
         }
         let q = Quality {
             interleave: 8,
             ..Quality::default()
         };
         q.validate().unwrap();
+        // 0 chooses from the VPL count.
+        let mut r = Render::default();
+        assert_eq!(r.renderer_config(36).interleave, 4);
+        r.vpls = 4096;
+        assert_eq!(r.renderer_config(36).interleave, 8);
+        r.quality.interleave = 2;
+        assert_eq!(r.renderer_config(36).interleave, 2);
     }
 
     #[test]

@@ -56,6 +56,8 @@ impl Pipeline {
         // Within the adapter's shadow layers, 5 a sample.
         let most = (gpu.limits.max_texture_array_layers / 5).max(1);
         rc.light_samples = cfg.light_samples(&frame0, &tracer, most);
+        rc.points_per_vpl = cfg.ism_points(&frame0, &tracer);
+        rc.num_points = config::ism_point_set_size(rc.points_per_vpl, frame0.tris.len());
         let mut renderer = Renderer::new(gpu, rc, &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;

@@ -113,6 +113,38 @@ pub fn point_set(frame: &Frame, count: usize, seed: u64) -> Vec<Point> {
         .collect()
 }
 
+/// The fraction of `frame`'s surface area a VPL sees: 64 points of its surfaces (by area,
+/// standing in for VPLs, which light paths leave on surfaces) each look at 64 others (by
+/// area) and count those in front of them, on the side of their surface that sees more, with
+/// nothing between; the mean over the 64. What a VPL's points of the set land in its tile as
+/// (the others fall behind its hemisphere or behind nearer surfaces).
+pub fn seen_fraction(frame: &Frame, tracer: &crate::trace::Tracer, seed: u64) -> f32 {
+    const LOOKERS: usize = 64;
+    const TARGETS: usize = 64;
+    let points = point_set(frame, LOOKERS * (TARGETS + 1), seed ^ 0x5ee);
+    let at = |p: &Point| {
+        let t = &frame.tris[p.tri as usize];
+        let x = t[0] * (1.0 - p.b1 - p.b2) + t[1] * p.b1 + t[2] * p.b2;
+        (x, frame.normals[p.tri as usize])
+    };
+    let seen: usize = points
+        .chunks(TARGETS + 1)
+        .map(|c| {
+            let (a, na) = at(&c[0]);
+            let (mut front, mut back) = (0, 0);
+            for q in &c[1..] {
+                let (b, nb) = at(q);
+                let side = na.dot(b - a);
+                if side != 0.0 && !tracer.occluded(a, na, b, nb) {
+                    *(if side > 0.0 { &mut front } else { &mut back }) += 1;
+                }
+            }
+            front.max(back)
+        })
+        .sum();
+    seen as f32 / (LOOKERS * TARGETS) as f32
+}
+
 /// Side of the grid of near-field rays for a tile of `ism_size` texels whose holes pull-push
 /// fills up to `2^pull_levels` texels: the rays land about 0.7 of that apart, so the nearest
 /// surfaces a VPL sees leave no hole pull-push cannot close (13 for 64 texels, 3 levels).
