@@ -62,7 +62,7 @@ struct Params {
     aa: u32, // sub-samples per pixel side (width, height: the sub-sample grid's)
     near_points: u32,
     textured: u32, // 1: `surface` holds each sample's albedo and emission
-    _pad1: u32,
+    near_grid: u32,
     _pad2: u32,
 }
 

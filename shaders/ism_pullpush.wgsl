@@ -1,6 +1,7 @@
 // Pull-push hole filling within each ISM tile. The pyramid holds `depth + 4 * level` (depth
 // normalized to [0,1], level the pyramid level whose footprint the value stands for), -1 for a
-// hole. `decode` turns the splat atlas into level 0; `pull` averages the valid children into
+// hole. `decode` turns the splat atlas into level 0 (each texel the nearer of its own depth and
+// its near-field cell's, see `texel_depth`); `pull` averages the valid children into
 // the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
 // Tiles of at most 64 texels a side take `fused` instead: all of it in one dispatch, the
@@ -11,6 +12,7 @@
 @group(0) @binding(1) var<storage, read> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(3) var<storage, read> slots: array<vec2u>;
+@group(0) @binding(4) var<storage, read> near: array<u32>;
 
 struct Level {
     level: u32,
@@ -27,8 +29,9 @@ fn decode(@builtin(global_invocation_id) gid: vec3u) {
     if i >= P.num_changed * per_tile {
         return;
     }
-    let t = slots[i / per_tile].x * per_tile + i % per_tile;
-    pyramid[t] = decoded(atlas[t]);
+    let slot = slots[i / per_tile].x;
+    let k = i % per_tile;
+    pyramid[slot * per_tile + k] = texel_depth(slot, k % P.ism_size, k / P.ism_size);
 }
 
 // One invocation per texel of the coarser level `L.size / 2`.
@@ -69,16 +72,29 @@ fn push(@builtin(global_invocation_id) gid: vec3u) {
 }
 
 // The fused pull-push for tiles of at most FUSED_MAX texels a side: one workgroup per redrawn
-// tile (k = workgroup id), its coarser levels (1, 2, ...) in workgroup memory, level 0 written
-// straight from the atlas. The same operations in the same order as decode, pull and push, so
-// the same level 0, the only level the gather reads; no pass over the whole pyramid between
-// levels, and one dispatch instead of 2 levels + 1.
+// tile (k = workgroup id), its coarser levels (1, 2, ...) in workgroup memory; level 0 is
+// written as decoded while level 1 is pulled, and its holes filled last. The same operations
+// in the same order as decode, pull and push, so the same level 0, the only level the gather
+// reads; no pass over the whole pyramid between levels, and one dispatch instead of 2 levels + 1.
 const FUSED_MAX: u32 = 64u;
 // Levels 1 to 5 of a 64-texel tile: 32^2 + 16^2 + 8^2 + 4^2 + 2^2 values.
 var<workgroup> up: array<f32, 1364>;
 
 fn decoded(e: u32) -> f32 {
     return select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
+}
+
+// Level 0 at texel (x, y) of `slot`'s tile: the nearer of the splat's depth there and that of
+// the near-field cell it lies in (inverted depths: the larger). Tile sides are powers of two:
+// shifts, not divisions (which a software rasterizer does a lane at a time).
+fn texel_depth(slot: u32, x: u32, y: u32) -> f32 {
+    let sh = countTrailingZeros(P.ism_size);
+    var e = atlas[(slot << (2u * sh)) + (y << sh) + x];
+    let n = P.near_grid;
+    if n > 0u {
+        e = max(e, near[slot * n * n + ((y * n) >> sh) * n + ((x * n) >> sh)]);
+    }
+    return decoded(e);
 }
 
 // The mean depth of the valid ones of four values as a value of level `level`, or a hole.
@@ -111,14 +127,26 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     if k >= P.num_changed || size > FUSED_MAX {
         return;
     }
-    let levels = min(P.pull_levels, countTrailingZeros(size) - 1u);
-    let base = slots[k].x * size * size;
+    let sh = countTrailingZeros(size);
+    let levels = min(P.pull_levels, sh - 1u);
+    let slot = slots[k].x;
     if levels > 0u {
         // Pull level 0 (the decoded atlas) into level 1.
         let h = size / 2u;
         for (var b = t; b < h * h; b += 64u) {
-            let at = base + (b / h) * 2u * size + (b % h) * 2u;
-            up[b] = pulled(decoded(atlas[at]), decoded(atlas[at + 1u]), decoded(atlas[at + size]), decoded(atlas[at + size + 1u]), 1u);
+            let x = (b & (h - 1u)) * 2u;
+            let y = (b >> (sh - 1u)) * 2u;
+            let v00 = texel_depth(slot, x, y);
+            let v10 = texel_depth(slot, x + 1u, y);
+            let v01 = texel_depth(slot, x, y + 1u);
+            let v11 = texel_depth(slot, x + 1u, y + 1u);
+            // Level 0 as decoded; its holes are filled below.
+            let at = (slot << (2u * sh)) + (y << sh) + x;
+            pyramid[at] = v00;
+            pyramid[at + 1u] = v10;
+            pyramid[at + size] = v01;
+            pyramid[at + size + 1u] = v11;
+            up[b] = pulled(v00, v10, v01, v11, 1u);
         }
     }
     // Pull level l into l + 1.
@@ -129,7 +157,7 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         let src = up_offset(size, l);
         let dst = up_offset(size, l + 1u);
         for (var b = t; b < h * h; b += 64u) {
-            let at = src + (b / h) * 2u * s + (b % h) * 2u;
+            let at = src + (b >> (sh - l - 1u)) * 2u * s + (b & (h - 1u)) * 2u;
             up[dst + b] = pulled(up[at], up[at + 1u], up[at + s], up[at + s + 1u], l + 1u);
         }
     }
@@ -142,18 +170,23 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         let parent = up_offset(size, l + 1u);
         for (var i = t; i < s * s; i += 64u) {
             if up[at + i] < 0.0 {
-                up[at + i] = up[parent + ((i / s) / 2u) * h + (i % s) / 2u];
+                up[at + i] = up[parent + (i >> (sh - l + 1u)) * h + ((i & (s - 1u)) >> 1u)];
             }
         }
     }
     workgroupBarrier();
-    // Level 0: the decoded atlas, its holes filled from level 1.
+    // Level 0: its holes filled from level 1.
     let h = size / 2u;
-    for (var i = t; i < size * size; i += 64u) {
-        var v = decoded(atlas[base + i]);
-        if v < 0.0 && levels > 0u {
-            v = up[((i / size) / 2u) * h + (i % size) / 2u];
+    let base = slot << (2u * sh);
+    if levels == 0u {
+        for (var i = t; i < size * size; i += 64u) {
+            pyramid[base + i] = texel_depth(slot, i & (size - 1u), i >> sh);
         }
-        pyramid[base + i] = v;
+        return;
+    }
+    for (var i = t; i < size * size; i += 64u) {
+        if pyramid[base + i] < 0.0 {
+            pyramid[base + i] = up[((i >> sh) >> 1u) * h + ((i & (size - 1u)) >> 1u)];
+        }
     }
 }

@@ -1,8 +1,10 @@
-// ISM splat: every VPL slot to redraw projects its own subset of the scene's points, then its
-// ray-cast near-field points (the first surfaces its VPL sees, evenly over the tile), into its
-// paraboloid tile, keeping the nearest with atomicMax on an inverted depth (0 means empty).
-// `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other slots keep
-// their tiles.
+// ISM splat: every VPL slot to redraw projects its own subset of the scene's points into its
+// paraboloid tile, keeping the nearest with atomicMax on an inverted depth (0 means empty),
+// and its ray-cast near-field points (the first surfaces its VPL sees, one along the centre of
+// each cell of a P.near_grid^2 grid over the tile) into its cells in `near`: a near-field point
+// stands for its whole cell, and pull-push gives each texel the nearer of its own depth and
+// its cell's. `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other
+// slots keep their tiles.
 
 @group(0) @binding(0) var<storage, read> P: Params;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -16,16 +18,26 @@ struct Point {
 @group(0) @binding(3) var<storage, read> vpls: array<Vpl>;
 @group(0) @binding(4) var<storage, read> slots: array<vec2u>;
 @group(0) @binding(5) var<storage, read_write> atlas: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> near: array<atomic<u32>>;
 
 // Empties the tiles of the slots to redraw (one invocation per texel).
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3u) {
-    let per_tile = P.ism_size * P.ism_size;
+    // Tile sides are powers of two: shifts, not divisions.
+    let sh = 2u * countTrailingZeros(P.ism_size);
+    let per_tile = 1u << sh;
     let i = gid.x + gid.y * 65535u * 64u;
     if i >= P.num_changed * per_tile {
         return;
     }
-    atomicStore(&atlas[slots[i / per_tile].x * per_tile + i % per_tile], 0u);
+    let slot = slots[i >> sh].x;
+    let k = i & (per_tile - 1u);
+    atomicStore(&atlas[(slot << sh) + k], 0u);
+    // The slot's near-field cells (fewer than its texels, but for tiles of 8 or 16).
+    let cells = P.near_grid * P.near_grid;
+    for (var c = k; c < cells; c += per_tile) {
+        atomicStore(&near[slot * cells + c], 0u);
+    }
 }
 
 @compute @workgroup_size(64)
@@ -60,18 +72,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let texel = paraboloid_texel(dir, v.normal.xyz, P.ism_size);
     let depth = 16777216u - u32(clamp(dist / P.far, 0.0, 1.0) * 16777215.0);
-    let base = s * P.ism_size * P.ism_size;
-    // A near-field point stands for its ray's whole cell of the tile (pad: the cell's
-    // half-width in texels), so it covers what lies behind it there; a point of the set, one texel.
-    let r = i32(pt.pad);
-    let size = i32(P.ism_size);
-    let t = vec2i(i32(texel % P.ism_size), i32(texel / P.ism_size));
-    for (var dy = -r; dy <= r; dy++) {
-        for (var dx = -r; dx <= r; dx++) {
-            let q = t + vec2i(dx, dy);
-            if all(q >= vec2i(0)) && all(q < vec2i(size)) {
-                atomicMax(&atlas[base + u32(q.y * size + q.x)], depth);
-            }
-        }
+    if j < P.points_per_vpl {
+        atomicMax(&atlas[s * P.ism_size * P.ism_size + texel], depth);
+    } else {
+        let n = P.near_grid;
+        let sh = countTrailingZeros(P.ism_size);
+        let cell = (((texel >> sh) * n) >> sh) * n + (((texel & (P.ism_size - 1u)) * n) >> sh);
+        atomicMax(&near[s * n * n + cell], depth);
     }
 }

@@ -120,7 +120,6 @@ impl Pipeline {
             &self.tracer,
             &selection.shaded,
             self.renderer.near_directions(),
-            self.renderer.config.ism_size,
         );
         lap(&mut stages, "ism_near", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.

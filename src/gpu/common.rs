@@ -37,7 +37,9 @@ gpu_struct! {
         /// 1: the `surface` pass wrote each sample's albedo and emission (textures, vertex
         /// colours); 0: they are the triangle's.
         pub textured: u32,
-        pub _pad1: u32,
+        /// Side of the grid of near-field cells of a tile (0: no near-field points): a slot's
+        /// near-field point keeps the nearest depth of its cell (see `ism`).
+        pub near_grid: u32,
         pub _pad2: u32,
     }
 }

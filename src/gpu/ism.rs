@@ -50,6 +50,7 @@ pub(crate) const SPLAT: Pass = Pass {
             read("vpls", Elem::Struct(&Vpl::LAYOUT)),
             read("slots", Elem::Plain(8)),
             read_write("atlas", Elem::Plain(4)),
+            read_write("near", Elem::Plain(4)),
         ],
     }],
 };
@@ -65,6 +66,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
                 read("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
                 read("slots", Elem::Plain(8)),
+                read("near", Elem::Plain(4)),
             ],
         },
         Group {
@@ -179,16 +181,14 @@ pub fn near_directions(n: u32) -> Vec<Vec3> {
 /// points while it covers most of the VPL's tile; the tile is then mostly holes and the VPL
 /// shines through it. A VPL in a thin gap (between a lamp's top and the ceiling) sees the
 /// room through its whole tile instead of a sliver. The ray-cast points are spread by solid
-/// angle, so whatever a VPL sees first closes its tile.
+/// angle, so whatever a VPL sees first closes its tile: the splat keeps the nearest depth of
+/// each ray's cell of the tile (the n x n grid whose centres the rays go through), and every
+/// texel of the cell takes it where its own splat is farther or empty.
 pub fn near_points(
     tracer: &crate::trace::Tracer,
     vpls: &[crate::vpl::ShadedVpl],
     dirs: &[Vec3],
-    ism_size: u32,
 ) -> Vec<Point> {
-    // Each ray stands for a cell of the tile: it covers a square of (2 half + 1) texels.
-    let n = (dirs_side(dirs.len())).max(1);
-    let half = ism_size.div_ceil(n) / 2;
     use rayon::prelude::*;
     vpls.par_iter()
         .flat_map_iter(|v| {
@@ -200,7 +200,7 @@ pub fn near_points(
                         tri: h.tri,
                         b1: h.b1,
                         b2: h.b2,
-                        pad: half,
+                        pad: 0,
                     },
                     None => Point {
                         tri: u32::MAX,
@@ -212,13 +212,6 @@ pub fn near_points(
             })
         })
         .collect()
-}
-
-/// The grid side whose disk holds `count` directions (inverse of [`near_directions`]).
-fn dirs_side(count: usize) -> u32 {
-    (1..=64u32)
-        .find(|&n| near_directions(n).len() >= count)
-        .unwrap_or(64)
 }
 
 /// The offset into the point set of slot `slot`'s subset (depends on the seed and slot only).
@@ -238,6 +231,8 @@ pub struct Ism {
     level_groups: Vec<wgpu::BindGroup>,
     /// What the splat writes: one tile of inverted depths (0: empty) a slot.
     pub atlas: wgpu::Buffer,
+    /// The near-field cells the splat writes: [`near_grid`]^2 inverted depths a slot.
+    pub near: wgpu::Buffer,
     /// Level 0 of the pyramid is the filled atlas the gather reads.
     pub pyramid: wgpu::Buffer,
     size: u32,
@@ -263,6 +258,8 @@ impl Ism {
         size: u32,
         levels: u32,
     ) -> Self {
+        // The renderer's grid (Params::near_grid), from the levels asked for.
+        let cells = near_grid(size, levels) as u64;
         let levels = levels.min(size.trailing_zeros().saturating_sub(1));
         let tile = |l: u32| max_vpls as u64 * ((size >> l) as u64).pow(2);
         let offsets_l: Vec<u64> = (0..=levels + 1)
@@ -275,6 +272,11 @@ impl Ism {
         let atlas = gpu.buffer(
             "ism atlas",
             atlas_bytes(max_vpls, size),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let near = gpu.buffer(
+            "ism near-field cells",
+            bytes::<u32>(max_vpls as u64 * cells * cells),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let pyramid = gpu.buffer(
@@ -297,6 +299,7 @@ impl Ism {
                 ("vpls", vpls.as_entire_binding()),
                 ("slots", slots.as_entire_binding()),
                 ("atlas", atlas.as_entire_binding()),
+                ("near", near.as_entire_binding()),
             ],
         );
         let m_pp = PULL_PUSH.module(gpu);
@@ -315,6 +318,7 @@ impl Ism {
                 ("atlas", atlas.as_entire_binding()),
                 ("pyramid", pyramid.as_entire_binding()),
                 ("slots", slots.as_entire_binding()),
+                ("near", near.as_entire_binding()),
             ],
         );
         let level_groups = (0..=levels)
@@ -345,6 +349,7 @@ impl Ism {
             pp_group,
             level_groups,
             atlas,
+            near,
             pyramid,
             size,
             levels,
@@ -432,9 +437,10 @@ impl Ism {
 pub const FUSED_MAX: u32 = 64;
 
 /// CPU twin of the pull-push: level 0 of one tile of side `size` from its atlas texels
-/// (inverted depths, 0: empty), holes filled from up to `levels` coarser levels; a value is
-/// `depth + 4 * level`, -1 a hole left open.
-pub fn pull_push(atlas: &[u32], size: u32, levels: u32) -> Vec<f32> {
+/// (inverted depths, 0: empty) and its `n` x `n` near-field cells (`near`, inverted depths; n =
+/// 0: none), each texel the nearer of its own and its cell's, holes filled from up to
+/// `levels` coarser levels; a value is `depth + 4 * level`, -1 a hole left open.
+pub fn pull_push(atlas: &[u32], (n, near): (u32, &[u32]), size: u32, levels: u32) -> Vec<f32> {
     let levels = levels.min(size.trailing_zeros().saturating_sub(1));
     let decoded = |e: u32| {
         if e == 0 {
@@ -444,7 +450,16 @@ pub fn pull_push(atlas: &[u32], size: u32, levels: u32) -> Vec<f32> {
         }
     };
     let depth = |v: f32| v - 4.0 * (v * 0.25).floor();
-    let mut pyramid = vec![atlas.iter().map(|&e| decoded(e)).collect::<Vec<f32>>()];
+    let cell = |i: u32| ((i / size) * n / size) * n + (i % size) * n / size;
+    let level0 = (0..size * size).map(|i| {
+        let e = atlas[i as usize];
+        decoded(if n > 0 {
+            e.max(near[cell(i) as usize])
+        } else {
+            e
+        })
+    });
+    let mut pyramid = vec![level0.collect::<Vec<f32>>()];
     for l in 0..levels {
         let (s, h) = ((size >> l) as usize, (size >> (l + 1)) as usize);
         let below = &pyramid[l as usize];
@@ -486,8 +501,8 @@ mod tests {
     use rand::Rng;
 
     /// Both GPU paths (fused for 64, per level for 128) fill the same tiles as the CPU twin,
-    /// on atlases from full to almost empty, for a subset of the slots (the others keep
-    /// their tiles).
+    /// on atlases from full to almost empty with near-field cells or without, for a subset
+    /// of the slots (the others keep their tiles).
     #[test]
     fn the_gpu_pull_push_matches_its_cpu_twin() {
         let gpu = match Gpu::new(BackendChoice::Auto) {
@@ -495,7 +510,13 @@ mod tests {
             Err(e) => return println!("no GPU adapter, pull-push test skipped: {e}"),
         };
         let mut r = crate::math::rng(&[5, 0x9911]);
-        for (size, levels, slots) in [(64u32, 3u32, 6u32), (16, 5, 3), (8, 0, 2), (128, 3, 3)] {
+        for (size, levels, slots, cells) in [
+            (64u32, 3u32, 6u32, true),
+            (64, 3, 2, false),
+            (16, 5, 3, true),
+            (8, 0, 2, true),
+            (128, 3, 3, true),
+        ] {
             let per_tile = (size * size) as usize;
             // Each tile its own density of points: 0.5 to 90% of texels hit.
             let atlas: Vec<u32> = (0..slots as usize * per_tile)
@@ -508,11 +529,23 @@ mod tests {
                     }
                 })
                 .collect();
+            // A third of the cells hold a depth.
+            let n = if cells { near_grid(size, levels) } else { 0 };
+            let near: Vec<u32> = (0..(slots * n * n) as usize)
+                .map(|_| {
+                    if r.random::<f64>() < 0.3 {
+                        r.random_range(1..=16777216u32)
+                    } else {
+                        0
+                    }
+                })
+                .collect();
             let changed: Vec<[u32; 2]> = (0..slots).rev().step_by(2).map(|s| [s, 0]).collect();
             let params = Params {
                 ism_size: size,
                 pull_levels: levels,
                 num_changed: changed.len() as u32,
+                near_grid: n,
                 ..bytemuck::Zeroable::zeroed()
             };
             let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
@@ -527,6 +560,8 @@ mod tests {
             let ism = Ism::new(&gpu, &p, &empty, &empty, &empty, &s, slots, size, levels);
             gpu.queue
                 .write_buffer(&ism.atlas, 0, bytemuck::cast_slice(&atlas));
+            gpu.queue
+                .write_buffer(&ism.near, 0, bytemuck::cast_slice(&near));
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             ism.encode_pull_push(&mut enc, changed.len() as u32);
             gpu.queue.submit([enc.finish()]);
@@ -537,8 +572,10 @@ mod tests {
             for tile in 0..slots as usize {
                 let range = tile * per_tile..(tile + 1) * per_tile;
                 let redone = changed.iter().any(|c| c[0] as usize == tile);
+                let cells = (n as usize).pow(2);
+                let own = (n, &near[(tile * cells).min(near.len())..]);
                 let want = if redone {
-                    pull_push(&atlas[range.clone()], size, levels)
+                    pull_push(&atlas[range.clone()], own, size, levels)
                 } else {
                     vec![0.0; per_tile] // never written: the buffer's zeros
                 };

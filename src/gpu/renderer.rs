@@ -667,7 +667,11 @@ impl Renderer {
             aa: c.aa,
             near_points: self.near_points(input),
             textured: self.surface.is_some() as u32,
-            _pad1: 0,
+            near_grid: if self.near_points(input) > 0 {
+                ism::near_grid(c.ism_size, c.pull_levels)
+            } else {
+                0
+            },
             _pad2: 0,
         };
         self.gpu
