@@ -9,10 +9,10 @@
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
 
 @group(0) @binding(0) var<storage, read> P: Params;
-@group(0) @binding(1) var<storage, read> atlas: array<u32>;
+@group(0) @binding(1) var<storage, read_write> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(3) var<storage, read> slots: array<vec2u>;
-@group(0) @binding(4) var<storage, read> near: array<u32>;
+@group(0) @binding(4) var<storage, read_write> near: array<u32>;
 
 struct Level {
     level: u32,
@@ -76,6 +76,8 @@ fn push(@builtin(global_invocation_id) gid: vec3u) {
 // written as decoded while level 1 is pulled, and its holes filled last. The same operations
 // in the same order as decode, pull and push, so the same level 0, the only level the gather
 // reads; no pass over the whole pyramid between levels, and one dispatch instead of 2 levels + 1.
+// It empties the tile's atlas texels and near-field cells once read, so the next splat finds
+// them empty without a clear pass (the buffers start zeroed).
 const FUSED_MAX: u32 = 64u;
 // Levels 1 to 5 of a 64-texel tile: 32^2 + 16^2 + 8^2 + 4^2 + 2^2 values.
 var<workgroup> up: array<f32, 1364>;
@@ -140,12 +142,16 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
             let v10 = texel_depth(slot, x + 1u, y);
             let v01 = texel_depth(slot, x, y + 1u);
             let v11 = texel_depth(slot, x + 1u, y + 1u);
-            // Level 0 as decoded; its holes are filled below.
+            // Level 0 as decoded; its holes are filled below. The atlas texels are read.
             let at = (slot << (2u * sh)) + (y << sh) + x;
             pyramid[at] = v00;
             pyramid[at + 1u] = v10;
             pyramid[at + size] = v01;
             pyramid[at + size + 1u] = v11;
+            atlas[at] = 0u;
+            atlas[at + 1u] = 0u;
+            atlas[at + size] = 0u;
+            atlas[at + size + 1u] = 0u;
             up[b] = pulled(v00, v10, v01, v11, 1u);
         }
     }
@@ -181,12 +187,19 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     if levels == 0u {
         for (var i = t; i < size * size; i += 64u) {
             pyramid[base + i] = texel_depth(slot, i & (size - 1u), i >> sh);
+            atlas[base + i] = 0u;
         }
-        return;
+        // Every texel has read its near-field cell.
+        workgroupBarrier();
+    } else {
+        for (var i = t; i < size * size; i += 64u) {
+            if pyramid[base + i] < 0.0 {
+                pyramid[base + i] = up[((i >> sh) >> 1u) * h + ((i & (size - 1u)) >> 1u)];
+            }
+        }
     }
-    for (var i = t; i < size * size; i += 64u) {
-        if pyramid[base + i] < 0.0 {
-            pyramid[base + i] = up[((i >> sh) >> 1u) * h + ((i & (size - 1u)) >> 1u)];
-        }
+    let n = P.near_grid;
+    for (var c = t; c < n * n; c += 64u) {
+        near[slot * n * n + c] = 0u;
     }
 }

@@ -63,10 +63,10 @@ pub(crate) const PULL_PUSH: Pass = Pass {
             stages: wgpu::ShaderStages::COMPUTE,
             bindings: &[
                 params("P", &Params::LAYOUT),
-                read("atlas", Elem::Plain(4)),
+                read_write("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
                 read("slots", Elem::Plain(8)),
-                read("near", Elem::Plain(4)),
+                read_write("near", Elem::Plain(4)),
             ],
         },
         Group {
@@ -238,6 +238,8 @@ pub struct Ism {
     size: u32,
     levels: u32,
     max_vpls: u32,
+    /// Tiles may hold an unfinished frame's splats: the next splat clears what it redraws.
+    unclean: bool,
 }
 
 /// Bytes of the atlas for `max_vpls` tiles of `size`^2.
@@ -269,15 +271,14 @@ impl Ism {
                 Some(o)
             })
             .collect();
-        let atlas = gpu.buffer(
-            "ism atlas",
-            atlas_bytes(max_vpls, size),
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        );
+        let rw = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC;
+        let atlas = gpu.buffer("ism atlas", atlas_bytes(max_vpls, size), rw);
         let near = gpu.buffer(
             "ism near-field cells",
             bytes::<u32>(max_vpls as u64 * cells * cells),
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            rw,
         );
         let pyramid = gpu.buffer(
             "ism pyramid",
@@ -354,24 +355,40 @@ impl Ism {
             size,
             levels,
             max_vpls,
+            unclean: false,
         }
     }
 
+    /// After a frame that may have stopped between splat and pull-push: the next splat
+    /// clears the tiles it redraws (the renderer redraws them all, see `Renderer::render`).
+    pub fn forget(&mut self) {
+        self.unclean = true;
+    }
+
     /// Empties the tiles of the first `changed` entries of the slots buffer and splats their
-    /// points; the other tiles are kept.
-    pub fn encode_splat(&self, enc: &mut wgpu::CommandEncoder, changed: u32, points_per_slot: u32) {
+    /// points; the other tiles are kept. The fused pull-push leaves the tiles it read empty,
+    /// so tiles of at most [`FUSED_MAX`] texels need no clear but after [`Ism::forget`].
+    pub fn encode_splat(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        changed: u32,
+        points_per_slot: u32,
+    ) {
         debug_assert!(changed <= self.max_vpls);
         if changed == 0 {
             return;
         }
-        let (x, y) = groups_1d(changed as u64 * (self.size as u64).pow(2));
-        dispatch(
-            enc,
-            "ism clear",
-            &self.clear,
-            &[&self.splat_group],
-            (x, y, 1),
-        );
+        if self.size > FUSED_MAX || self.unclean {
+            let (x, y) = groups_1d(changed as u64 * (self.size as u64).pow(2));
+            dispatch(
+                enc,
+                "ism clear",
+                &self.clear,
+                &[&self.splat_group],
+                (x, y, 1),
+            );
+        }
+        self.unclean = false;
         dispatch(
             enc,
             "ism splat",
@@ -385,6 +402,7 @@ impl Ism {
     /// pull-push: in one dispatch (a workgroup a tile, `fused`) for tiles of at most
     /// [`FUSED_MAX`] texels a side, else a dispatch per level over the pyramid.
     pub fn encode_pull_push(&self, enc: &mut wgpu::CommandEncoder, changed: u32) {
+        // (The fused pass also empties the tiles it reads: see `encode_splat`.)
         if changed == 0 {
             return;
         }
@@ -502,7 +520,8 @@ mod tests {
 
     /// Both GPU paths (fused for 64, per level for 128) fill the same tiles as the CPU twin,
     /// on atlases from full to almost empty with near-field cells or without, for a subset
-    /// of the slots (the others keep their tiles).
+    /// of the slots (the others keep their tiles); the fused path leaves the atlas and
+    /// near-field cells of the tiles it read empty, and the others' as they were.
     #[test]
     fn the_gpu_pull_push_matches_its_cpu_twin() {
         let gpu = match Gpu::new(BackendChoice::Auto) {
@@ -569,6 +588,27 @@ mod tests {
                 .read_buffer(&ism.pyramid, atlas_bytes(slots, size))
                 .unwrap();
             let got: &[f32] = bytemuck::cast_slice(&bytes);
+            let read_u32 = |b: &wgpu::Buffer, len: usize| -> Vec<u32> {
+                let bytes = gpu.read_buffer(b, (4 * len).max(4) as u64).unwrap();
+                bytemuck::cast_slice(&bytes)[..len].to_vec()
+            };
+            let atlas_after = read_u32(&ism.atlas, atlas.len());
+            let near_after = read_u32(&ism.near, near.len());
+            let cells_of = (n as usize).pow(2);
+            for tile in 0..slots as usize {
+                let redone = changed.iter().any(|c| c[0] as usize == tile);
+                let emptied = redone && size <= FUSED_MAX;
+                let texels = tile * per_tile..(tile + 1) * per_tile;
+                let cells = tile * cells_of..(tile + 1) * cells_of;
+                for (after, before, range) in
+                    [(&atlas_after, &atlas, texels), (&near_after, &near, cells)]
+                {
+                    for i in range {
+                        let want = if emptied { 0 } else { before[i] };
+                        assert_eq!(after[i], want, "size {size}, tile {tile}, entry {i}");
+                    }
+                }
+            }
             for tile in 0..slots as usize {
                 let range = tile * per_tile..(tile + 1) * per_tile;
                 let redone = changed.iter().any(|c| c[0] as usize == tile);

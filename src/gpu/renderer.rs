@@ -867,10 +867,13 @@ impl Renderer {
         })();
         self.timestamps = timestamps;
         if recorded.is_err() {
-            // This frame's history may not have been written: the next starts anew.
+            // This frame's history, ISM tiles and shadow maps may not have been written: the
+            // next frame starts anew (uploads and redraws everything).
             if let Some(t) = &mut self.temporal {
                 t.forget();
             }
+            self.ism.forget();
+            self.last = Last::default();
         }
         let (kept, (hdr, ldr, parts, pass_s)) = recorded?;
         reuse.shadow_maps_kept = kept;
