@@ -3,6 +3,10 @@
 // the pixel at block position k = ((y + shift_y) mod n) * n + (x + shift_x) mod n sums only
 // the VPLs i with i mod n^2 = k, scaled by n^2, and writes that irradiance-like sum without
 // the albedo: the `interleave` pass filters it and applies the albedo.
+// Interleaved, invocations are laid out de-interleaved: the dispatch is n x n sub-images, each
+// of every n-th pixel in x and y, so that a workgroup's pixels gather the same VPLs in step (the
+// same VPL record and ISM tile across its lanes, not n^2 different ones); each pixel's sum is
+// the same.
 // Supersampled (P.aa = S > 1), the gather (and the interleave filter) run at one sample per
 // pixel, on tile 0 of the sub-sample grid, and leave the albedo out: compose gives each
 // sub-sample the indirect light of the pixel's sample or of a neighbour's on its own surface
@@ -20,11 +24,26 @@
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     // One read of the parameters into registers (a storage buffer is not hoisted).
     let p = P;
-    if gid.x >= p.width || gid.y >= p.height {
+    let side = max(p.interleave, 1u);
+    var q = gid.xy;
+    if side > 1u {
+        // The gathered image: tile 0 of the sub-sample grid (all of it without supersampling).
+        let image = vec2u(p.width, p.height) / max(p.aa, 1u);
+        let sub = (image + side - 1u) / side;
+        let which = gid.xy / sub;
+        if any(which >= vec2u(side)) {
+            return;
+        }
+        q = (gid.xy % sub) * side + which;
+        if any(q >= image) {
+            return;
+        }
+    }
+    if q.x >= p.width || q.y >= p.height {
         return;
     }
-    let g = textureLoad(gbuf, vec2i(gid.xy), 0);
-    let pix = gid.y * p.width + gid.x;
+    let g = textureLoad(gbuf, vec2i(q), 0);
+    let pix = q.y * p.width + q.x;
     if g.w == 0u {
         indirect[pix] = vec4f(0.0);
         return;
@@ -33,9 +52,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let x = gbuffer_x(g);
     let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
     let texel_angle = 4.0 / f32(p.ism_size);
-    let side = max(p.interleave, 1u);
     let step = side * side;
-    let first = ((gid.y + p.shift_y) % side) * side + (gid.x + p.shift_x) % side;
+    let first = ((q.y + p.shift_y) % side) * side + (q.x + p.shift_x) % side;
     var sum = vec3f(0.0);
     for (var i = first; i < p.num_vpls; i += step) {
         let v = vpls[i];

@@ -58,7 +58,12 @@ impl Gather {
         Gather { pass, output }
     }
 
-    pub fn encode(&self, enc: &mut wgpu::CommandEncoder, width: u32, height: u32) {
-        self.pass.encode(enc, width, height);
+    /// Gathers the `width` x `height` image; with interleave side `n` > 1 the dispatch covers
+    /// the n x n de-interleaved sub-images of ceil(width / n) x ceil(height / n) (see the
+    /// shader).
+    pub fn encode(&self, enc: &mut wgpu::CommandEncoder, (width, height): (u32, u32), n: u32) {
+        let n = n.max(1);
+        self.pass
+            .encode(enc, width.div_ceil(n) * n, height.div_ceil(n) * n);
     }
 }

@@ -746,7 +746,7 @@ impl Renderer {
         } else {
             (gw, gh)
         };
-        self.gather.encode(&mut rec.enc, iw, ih);
+        self.gather.encode(&mut rec.enc, (iw, ih), c.interleave);
         rec.end_pass()?;
         // interleave: G-buffer, triangles, subset sums -> filtered indirect light (N > 1).
         if let Some(f) = &self.interleave {
