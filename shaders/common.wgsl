@@ -63,7 +63,7 @@ struct Params {
     near_points: u32,
     textured: u32, // 1: `surface` holds each sample's albedo and emission
     near_grid: u32,
-    _pad2: u32,
+    ism_level1: u32, // where level 1 of the ISM pyramid starts (0: no pull-push levels)
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

@@ -20,6 +20,18 @@
 @group(0) @binding(5) var<storage, read_write> indirect: array<vec4f>;
 @group(0) @binding(6) var<storage, read> surface: array<Surface>;
 
+// The ISM value of texel `texel` of `slot`'s tile: level 0 of the pyramid, or at a hole there
+// its parent in level 1 (filled by pull-push; `ism_pullpush.wgsl`), -1 if that is a hole too.
+fn ism_lookup(slot: u32, texel: u32, size: u32, level1: u32) -> f32 {
+    let v = ism[slot * size * size + texel];
+    if v >= 0.0 || level1 == 0u {
+        return v;
+    }
+    let sh = countTrailingZeros(size);
+    let h = size >> 1u;
+    return ism[level1 + slot * h * h + ((texel >> sh) >> 1u) * h + ((texel & (size - 1u)) >> 1u)];
+}
+
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     // One read of the parameters into registers (a storage buffer is not hoisted).
@@ -66,7 +78,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         if cos_x <= 0.0 || cos_y <= 0.0 {
             continue;
         }
-        let stored = ism[i * p.ism_size * p.ism_size + paraboloid_texel(-w, v.normal.xyz, p.ism_size)];
+        let stored = ism_lookup(i, paraboloid_texel(-w, v.normal.xyz, p.ism_size), p.ism_size, p.ism_level1);
         if stored >= 0.0 {
             // The footprint of the level the depth came from (filled holes: a coarser one).
             let footprint = dist * texel_angle * exp2(ism_level(stored));

@@ -4,6 +4,8 @@
 // its near-field cell's, see `texel_depth`); `pull` averages the valid children into
 // the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
+// Push stops at level 1: the gather reads level 0 and, at a hole, its parent in level 1
+// (`ism_lookup` in common), the value push would have written there.
 // Tiles of at most 64 texels a side take `fused` instead: all of it in one dispatch, the
 // coarser levels in workgroup memory (the same values; `src/gpu/ism.rs` has the CPU twin).
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
@@ -181,8 +183,6 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         }
     }
     workgroupBarrier();
-    // Level 0: its holes filled from level 1.
-    let h = size / 2u;
     let base = slot << (2u * sh);
     if levels == 0u {
         for (var i = t; i < size * size; i += 64u) {
@@ -192,10 +192,10 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         // Every texel has read its near-field cell.
         workgroupBarrier();
     } else {
-        for (var i = t; i < size * size; i += 64u) {
-            if pyramid[base + i] < 0.0 {
-                pyramid[base + i] = up[((i >> sh) >> 1u) * h + ((i & (size - 1u)) >> 1u)];
-            }
+        // Level 1, filled, after level 0 in the pyramid: the gather's fallback at level 0's holes.
+        let h = size / 2u;
+        for (var i = t; i < h * h; i += 64u) {
+            pyramid[P.ism_level1 + slot * h * h + i] = up[i];
         }
     }
     let n = P.near_grid;

@@ -40,7 +40,9 @@ gpu_struct! {
         /// Side of the grid of near-field cells of a tile (0: no near-field points): a slot's
         /// near-field point keeps the nearest depth of its cell (see `ism`).
         pub near_grid: u32,
-        pub _pad2: u32,
+        /// Where level 1 of the ISM pyramid starts (`Ism::level1`; 0: no pull-push levels):
+        /// the gather reads it at level 0's holes.
+        pub ism_level1: u32,
     }
 }
 

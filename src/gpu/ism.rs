@@ -233,7 +233,8 @@ pub struct Ism {
     pub atlas: wgpu::Buffer,
     /// The near-field cells the splat writes: [`near_grid`]^2 inverted depths a slot.
     pub near: wgpu::Buffer,
-    /// Level 0 of the pyramid is the filled atlas the gather reads.
+    /// Level 0 of the pyramid is the atlas the gather reads, its holes filled from level 1
+    /// (see [`Ism::level1`]).
     pub pyramid: wgpu::Buffer,
     size: u32,
     levels: u32,
@@ -359,6 +360,15 @@ impl Ism {
         }
     }
 
+    /// Where level 1 starts in the pyramid (in values), 0 without pull-push levels.
+    pub fn level1(&self) -> u32 {
+        if self.levels == 0 {
+            0
+        } else {
+            self.max_vpls * self.size * self.size
+        }
+    }
+
     /// After a frame that may have stopped between splat and pull-push: the next splat
     /// clears the tiles it redraws (the renderer redraws them all, see `Renderer::render`).
     pub fn forget(&mut self) {
@@ -438,7 +448,8 @@ impl Ism {
                 g(texels(l + 1)),
             );
         }
-        for l in (0..self.levels).rev() {
+        // Down to level 1: the gather fills level 0's holes from it.
+        for l in (1..self.levels).rev() {
             dispatch(
                 enc,
                 "ism push",
@@ -518,7 +529,8 @@ mod tests {
     use crate::gpu::BackendChoice;
     use rand::Rng;
 
-    /// Both GPU paths (fused for 64, per level for 128) fill the same tiles as the CPU twin,
+    /// Both GPU paths (fused for 64, per level for 128) fill the same tiles as the CPU twin
+    /// (level 0 with its holes read from level 1, as the gather does),
     /// on atlases from full to almost empty with near-field cells or without, for a subset
     /// of the slots (the others keep their tiles); the fused path leaves the atlas and
     /// near-field cells of the tiles it read empty, and the others' as they were.
@@ -577,6 +589,11 @@ mod tests {
             let empty = buffer("unused", &[0u8; 1024]);
             let s = buffer("slots", bytemuck::cast_slice(&changed));
             let ism = Ism::new(&gpu, &p, &empty, &empty, &empty, &s, slots, size, levels);
+            let params = Params {
+                ism_level1: ism.level1(),
+                ..params
+            };
+            gpu.queue.write_buffer(&p, 0, bytemuck::bytes_of(&params));
             gpu.queue
                 .write_buffer(&ism.atlas, 0, bytemuck::cast_slice(&atlas));
             gpu.queue
@@ -584,10 +601,25 @@ mod tests {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             ism.encode_pull_push(&mut enc, changed.len() as u32);
             gpu.queue.submit([enc.finish()]);
+            // Levels 0 and 1, as the gather reads them: level 0, at its holes level 1.
+            let half = (size / 2) as usize;
+            let level1 = ism.level1() as usize;
+            let levels01 = per_tile + if level1 > 0 { half * half } else { 0 };
             let bytes = gpu
-                .read_buffer(&ism.pyramid, atlas_bytes(slots, size))
+                .read_buffer(&ism.pyramid, 4 * slots as u64 * levels01 as u64)
                 .unwrap();
-            let got: &[f32] = bytemuck::cast_slice(&bytes);
+            let pyramid: &[f32] = bytemuck::cast_slice(&bytes);
+            let got: Vec<f32> = (0..slots as usize * per_tile)
+                .map(|i| {
+                    let v = pyramid[i];
+                    if v >= 0.0 || level1 == 0 {
+                        return v;
+                    }
+                    let (tile, k) = (i / per_tile, i % per_tile);
+                    let (x, y) = (k % size as usize, k / size as usize);
+                    pyramid[level1 + tile * half * half + (y / 2) * half + x / 2]
+                })
+                .collect();
             let read_u32 = |b: &wgpu::Buffer, len: usize| -> Vec<u32> {
                 let bytes = gpu.read_buffer(b, (4 * len).max(4) as u64).unwrap();
                 bytemuck::cast_slice(&bytes)[..len].to_vec()

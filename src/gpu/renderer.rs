@@ -672,7 +672,7 @@ impl Renderer {
             } else {
                 0
             },
-            _pad2: 0,
+            ism_level1: self.ism.level1(),
         };
         self.gpu
             .queue
