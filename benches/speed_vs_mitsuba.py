@@ -62,7 +62,7 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 benches/speed_vs_mitsuba.py [--irad target/release/irad] [--vpls 256,1024,4096]
         [--repeat 3] [--out out/bench/speed] [--mitsuba-csv out/bench/mitsuba/mitsuba_cornell.csv]
-        [--ref DIR] [--reuse] [--mode TAG:HISTORY:ARGS ...]
+        [--ref DIR] [--reuse] [--mitsuba-now] [--mode TAG:HISTORY:ARGS ...]
 
 Writes OUT/speed_vs_mitsuba.csv with the printed table's figures.
 """
@@ -249,6 +249,9 @@ def main(argv=None):
                    help="keep finished renders found in OUT (their timings) instead of rendering again")
     p.add_argument("--mitsuba-csv", default=DEFAULT_CSV,
                    help="mitsuba_cornell.py's CSV; made with its defaults if missing")
+    p.add_argument("--mitsuba-now", action="store_true",
+                   help="measure Mitsuba again right before irad's runs (into the CSV's folder), "
+                        "so that both meet the machine in the same state (about a minute)")
     a = p.parse_args(argv)
     if a.repeat < 1 or a.size < 1 or a.ref_spp < 1:
         die("--repeat, --size and --ref-spp must be positive")
@@ -266,10 +269,11 @@ def main(argv=None):
         die(f"--irad {a.irad}: no such executable (build it with `cargo build --release`)")
     os.makedirs(a.out, exist_ok=True)
 
-    if os.path.exists(a.mitsuba_csv):
+    if os.path.exists(a.mitsuba_csv) and not a.mitsuba_now:
         print(f"Mitsuba: {a.mitsuba_csv}")
     else:
-        print(f"Mitsuba: {a.mitsuba_csv} is missing: running mitsuba_cornell.py", flush=True)
+        why = "measured now (--mitsuba-now)" if a.mitsuba_now else "is missing"
+        print(f"Mitsuba: {a.mitsuba_csv} {why}: running mitsuba_cornell.py", flush=True)
         mitsuba_cornell.run(mitsuba_cornell.DEFAULT_SPP, size=a.size,
                             out=os.path.dirname(a.mitsuba_csv) or ".")
     mrows = mitsuba_cornell.read_csv(a.mitsuba_csv)

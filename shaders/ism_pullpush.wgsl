@@ -124,7 +124,10 @@ fn up_offset(size: u32, l: u32) -> u32 {
     return o;
 }
 
-@compute @workgroup_size(64)
+// Invocations a workgroup: on lavapipe and llvmpipe 256 take 35% less time than 64 (without
+// the zeroing of workgroup memory, which the pipeline skips: every value is written first).
+const FUSED_LANES: u32 = 256u;
+@compute @workgroup_size(256)
 fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: u32) {
     let size = P.ism_size;
     let k = wid.x + wid.y * 65535u;
@@ -137,7 +140,7 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     if levels > 0u {
         // Pull level 0 (the decoded atlas) into level 1.
         let h = size / 2u;
-        for (var b = t; b < h * h; b += 64u) {
+        for (var b = t; b < h * h; b += FUSED_LANES) {
             let x = (b & (h - 1u)) * 2u;
             let y = (b >> (sh - 1u)) * 2u;
             let v00 = texel_depth(slot, x, y);
@@ -164,7 +167,7 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         let h = s / 2u;
         let src = up_offset(size, l);
         let dst = up_offset(size, l + 1u);
-        for (var b = t; b < h * h; b += 64u) {
+        for (var b = t; b < h * h; b += FUSED_LANES) {
             let at = src + (b >> (sh - l - 1u)) * 2u * s + (b & (h - 1u)) * 2u;
             up[dst + b] = pulled(up[at], up[at + 1u], up[at + s], up[at + s + 1u], l + 1u);
         }
@@ -176,7 +179,7 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
         let h = s / 2u;
         let at = up_offset(size, l);
         let parent = up_offset(size, l + 1u);
-        for (var i = t; i < s * s; i += 64u) {
+        for (var i = t; i < s * s; i += FUSED_LANES) {
             if up[at + i] < 0.0 {
                 up[at + i] = up[parent + (i >> (sh - l + 1u)) * h + ((i & (s - 1u)) >> 1u)];
             }
@@ -185,7 +188,7 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     workgroupBarrier();
     let base = slot << (2u * sh);
     if levels == 0u {
-        for (var i = t; i < size * size; i += 64u) {
+        for (var i = t; i < size * size; i += FUSED_LANES) {
             pyramid[base + i] = texel_depth(slot, i & (size - 1u), i >> sh);
             atlas[base + i] = 0u;
         }
@@ -194,12 +197,12 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     } else {
         // Level 1, filled, after level 0 in the pyramid: the gather's fallback at level 0's holes.
         let h = size / 2u;
-        for (var i = t; i < h * h; i += 64u) {
+        for (var i = t; i < h * h; i += FUSED_LANES) {
             pyramid[P.ism_level1 + slot * h * h + i] = up[i];
         }
     }
     let n = P.near_grid;
-    for (var c = t; c < n * n; c += 64u) {
+    for (var c = t; c < n * n; c += FUSED_LANES) {
         near[slot * n * n + c] = 0u;
     }
 }

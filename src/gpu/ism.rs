@@ -310,7 +310,18 @@ impl Ism {
         let decode = gpu.compute_pipeline("ism decode", &m_pp, "decode", &[l_pp, l_level]);
         let pull = gpu.compute_pipeline("ism pull", &m_pp, "pull", &[l_pp, l_level]);
         let push = gpu.compute_pipeline("ism push", &m_pp, "push", &[l_pp, l_level]);
-        let fused = gpu.compute_pipeline("ism pull-push", &m_pp, "fused", &[l_pp, l_level]);
+        // `fused` writes every value of its workgroup memory before reading it.
+        let no_zeroing = wgpu::PipelineCompilationOptions {
+            zero_initialize_workgroup_memory: false,
+            ..Default::default()
+        };
+        let fused = gpu.compute_pipeline_with(
+            "ism pull-push",
+            &m_pp,
+            "fused",
+            &[l_pp, l_level],
+            no_zeroing,
+        );
         let pp_group = PULL_PUSH.groups[0].bind(
             gpu,
             PULL_PUSH.name,

@@ -297,6 +297,19 @@ impl Gpu {
         entry: &str,
         layouts: &[&wgpu::BindGroupLayout],
     ) -> wgpu::ComputePipeline {
+        self.compute_pipeline_with(label, module, entry, layouts, Default::default())
+    }
+
+    /// [`Gpu::compute_pipeline`] with its compilation options (e.g. no zeroing of workgroup
+    /// memory for a shader that writes all of it before reading).
+    pub(crate) fn compute_pipeline_with(
+        &self,
+        label: &str,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        layouts: &[&wgpu::BindGroupLayout],
+        compilation_options: wgpu::PipelineCompilationOptions,
+    ) -> wgpu::ComputePipeline {
         let layouts: Vec<Option<&wgpu::BindGroupLayout>> =
             layouts.iter().map(|l| Some(*l)).collect();
         let pl = self
@@ -312,7 +325,7 @@ impl Gpu {
                 layout: Some(&pl),
                 module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options,
                 cache: None,
             })
     }
