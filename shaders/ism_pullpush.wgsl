@@ -5,7 +5,7 @@
 // the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
 // filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
 // Push stops at level 1: the gather reads level 0 and, at a hole, its parent in level 1
-// (`ism_lookup` in common), the value push would have written there.
+// (`ism_lookup` in gather.wgsl), the value push would have written there.
 // Tiles of at most 64 texels a side take `fused` instead: all of it in one dispatch, the
 // coarser levels in workgroup memory (the same values; `src/gpu/ism.rs` has the CPU twin).
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
@@ -76,8 +76,8 @@ fn push(@builtin(global_invocation_id) gid: vec3u) {
 // The fused pull-push for tiles of at most FUSED_MAX texels a side: one workgroup per redrawn
 // tile (k = workgroup id), its coarser levels (1, 2, ...) in workgroup memory; level 0 is
 // written as decoded while level 1 is pulled, and its holes filled last. The same operations
-// in the same order as decode, pull and push, so the same level 0, the only level the gather
-// reads; no pass over the whole pyramid between levels, and one dispatch instead of 2 levels + 1.
+// in the same order as decode, pull and push, so the same levels 0 and 1, the levels the
+// gather reads; no pass over the whole pyramid between levels, and one dispatch instead of 2 levels + 1.
 // It empties the tile's atlas texels and near-field cells once read, so the next splat finds
 // them empty without a clear pass (the buffers start zeroed).
 const FUSED_MAX: u32 = 64u;
@@ -201,6 +201,8 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
             pyramid[P.ism_level1 + slot * h * h + i] = up[i];
         }
     }
+    // The cells were read before the barrier above; order those storage reads too.
+    storageBarrier();
     let n = P.near_grid;
     for (var c = t; c < n * n; c += FUSED_LANES) {
         near[slot * n * n + c] = 0u;

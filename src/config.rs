@@ -1495,7 +1495,7 @@ mod tests {
 
     #[test]
     fn the_ism_point_set_grows_with_the_triangles() {
-        // The Cornell box (36 triangles) keeps 16 slots' worth of the default 4096 points.
+        // The Cornell box (36 triangles) keeps 16 slots' worth of 4096 points.
         assert_eq!(ism_point_set_size(4096, 36), 1 << 16);
         assert_eq!(ism_point_set_size(8192, 36), 1 << 17);
         // The atrium: one point a triangle, more than 16 slots' worth.

@@ -25,7 +25,8 @@ fn backends() -> Vec<BackendChoice> {
 }
 
 /// Render settings at `w` x `h` with `vpls` VPLs and `light_samples` emitter samples (the
-/// defaults otherwise: 64^2 ISM tiles, 4096 points a VPL, 3 pull-push levels).
+/// defaults otherwise: 64^2 ISM tiles, points a VPL from the scene (464 for the Cornell box), 3
+/// pull-push levels).
 fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
     let mut c = config::Render::default();
     c.sequence.size = config::Size {

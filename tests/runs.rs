@@ -390,3 +390,40 @@ fn the_floor_is_what_a_near_perfect_renderer_measures() {
         "relMSE floor / perfect = {ratio}"
     );
 }
+
+#[test]
+fn run_json_records_the_budgets_the_scene_chose() {
+    // --ism-points 0 and --interleave 0 (the defaults) choose from the scene and the VPLs;
+    // run.json says what they chose, the same as the library's rules give.
+    let scene = irad::scene::builtin::load("cornell").unwrap().unwrap();
+    let f = scene.at(0.0);
+    let tracer = irad::trace::Tracer::new(&f);
+    let seen = irad::gpu::ism::seen_fraction(&f, &tracer, 1);
+    let want = irad::config::ism_points_for(64, 3, seen, f.tris.len());
+    assert!((64..4096).contains(&want), "{want}");
+    for (vpls, interleave) in [("64", 4), ("4096", 8)] {
+        let out = tmp(&format!("budgets{vpls}"));
+        let o = irad(&[
+            "render",
+            "cornell",
+            "--size",
+            "16x16",
+            "--frames",
+            "0",
+            "--vpls",
+            vpls,
+            "--light-samples",
+            "1",
+            "--shadow-size",
+            "8",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+        assert_eq!(run["gpu"]["points_per_vpl"], want, "{vpls} VPLs");
+        assert_eq!(run["gpu"]["interleave"], interleave, "{vpls} VPLs");
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}

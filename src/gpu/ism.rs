@@ -17,7 +17,7 @@ use glam::{Vec2, Vec3};
 use rand::Rng;
 
 gpu_struct! {
-    /// A point of the set: its triangle and barycentrics (b1, b2).
+    /// A point of the set: its triangle and barycentrics (b1, b2); `pad` is unused (0).
     #[derive(Debug, PartialEq)]
     pub struct Point {
         pub tri: u32,
@@ -151,8 +151,13 @@ pub fn seen_fraction(frame: &Frame, tracer: &crate::trace::Tracer, seed: u64) ->
 /// fills up to `2^pull_levels` texels: the rays land about 0.7 of that apart, so the nearest
 /// surfaces a VPL sees leave no hole pull-push cannot close (13 for 64 texels, 3 levels).
 pub fn near_grid(ism_size: u32, pull_levels: u32) -> u32 {
-    let hole = 1u32 << pull_levels.min(ism_size.trailing_zeros());
-    (ism_size * 3 / (2 * hole) + 1).clamp(4, 32)
+    // The levels pull-push runs (Ism::new's clamp).
+    let levels = pull_levels.min(ism_size.trailing_zeros().saturating_sub(1));
+    let hole = 1u32 << levels;
+    // At most a cell of two texels a side, so that every cell holds its ray's texel.
+    (ism_size * 3 / (2 * hole) + 1)
+        .clamp(4, 32)
+        .min(ism_size / 2)
 }
 
 /// The near-field ray directions of a grid of side `n`, in a VPL's frame (z along its normal):
@@ -381,7 +386,7 @@ impl Ism {
     }
 
     /// After a frame that may have stopped between splat and pull-push: the next splat
-    /// clears the tiles it redraws (the renderer redraws them all, see `Renderer::render`).
+    /// first clears every tile and near-field cell.
     pub fn forget(&mut self) {
         self.unclean = true;
     }
@@ -399,7 +404,11 @@ impl Ism {
         if changed == 0 {
             return;
         }
-        if self.size > FUSED_MAX || self.unclean {
+        if self.unclean {
+            // A failed frame may have splatted any slot's tile and cells: all of them.
+            enc.clear_buffer(&self.atlas, 0, None);
+            enc.clear_buffer(&self.near, 0, None);
+        } else if self.size > FUSED_MAX {
             let (x, y) = groups_1d(changed as u64 * (self.size as u64).pow(2));
             dispatch(
                 enc,
