@@ -443,7 +443,8 @@ pub struct Quality {
     pub ism_size: u32,
     /// Points of the scene's point set each VPL splats into its ISM (besides its ray-cast
     /// near-field points); 0: from the scene, enough that the points a VPL sees close its tile
-    /// at pull-push's coarsest level (see `ism_points_for`), 64 to 4096
+    /// at pull-push's coarsest level and at least one for every 32 triangles (see
+    /// `ism_points_for`), 64 to 4096
     #[arg(long, default_value_t = Quality::default().ism_points, allow_hyphen_values = true)]
     pub ism_points: u32,
     /// Pull-push levels of the ISMs (holes up to 2^levels texels are filled; at most log2 of --ism-size)
