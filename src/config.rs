@@ -573,7 +573,7 @@ pub const AUTO_ISM_POINTS: (u32, u32) = (64, 4096);
 ///
 /// Within [`AUTO_ISM_POINTS`].
 pub fn ism_points_for(ism_size: u32, pull_levels: u32, seen: f32, triangles: usize) -> u32 {
-    let levels = pull_levels.min(ism_size.trailing_zeros().saturating_sub(1));
+    let levels = crate::gpu::ism::pull_levels_run(ism_size, pull_levels);
     let side = (ism_size >> levels) as f32;
     let n = (std::f32::consts::FRAC_PI_4 * side * side).max(1.0);
     let coverage = (n * n.ln().max(1.0) / seen.max(1e-3)).ceil() as u32;
@@ -742,15 +742,19 @@ impl Render {
     /// adapter by the renderer).
     pub fn renderer_config(&self, triangles: usize) -> RendererConfig {
         let q = &self.quality;
+        // From the scene: the pipeline chooses (`Render::ism_points`); the most it can choose
+        // stands in for the checks before.
+        let points = match q.ism_points {
+            0 => AUTO_ISM_POINTS.1,
+            n => n,
+        };
         RendererConfig {
             width: self.sequence.size.width,
             height: self.sequence.size.height,
             max_vpls: self.vpls,
             ism_size: q.ism_size,
-            // From the scene: the pipeline chooses (`Render::ism_points`); the most it can
-            // choose stand in for the checks before.
-            points_per_vpl: self.ism_points_or(AUTO_ISM_POINTS.1),
-            num_points: ism_point_set_size(self.ism_points_or(AUTO_ISM_POINTS.1), triangles),
+            points_per_vpl: points,
+            num_points: ism_point_set_size(points, triangles),
             pull_levels: q.pull_levels,
             ism_bias: q.ism_bias,
             // From the scene: the pipeline chooses (`Render::light_samples`, within the
@@ -772,14 +776,6 @@ impl Render {
             shadow_bias: 1.5,
             exposure: self.exposure,
             seed: self.sequence.seed,
-        }
-    }
-
-    /// `--ism-points`, or `auto` where it is 0 (from the scene).
-    fn ism_points_or(&self, auto: u32) -> u32 {
-        match self.quality.ism_points {
-            0 => auto,
-            n => n,
         }
     }
 

@@ -125,9 +125,8 @@ pub fn seen_fraction(frame: &Frame, tracer: &crate::trace::Tracer, seed: u64) ->
     const TARGETS: usize = 64;
     let points = point_set(frame, LOOKERS * (TARGETS + 1), seed ^ 0x5ee);
     let at = |p: &Point| {
-        let t = &frame.tris[p.tri as usize];
-        let x = t[0] * (1.0 - p.b1 - p.b2) + t[1] * p.b1 + t[2] * p.b2;
-        (x, frame.normals[p.tri as usize])
+        let tri = p.tri as usize;
+        (frame.point(tri, p.b1, p.b2), frame.normals[tri])
     };
     let seen: usize = points
         .chunks(TARGETS + 1)
@@ -147,13 +146,18 @@ pub fn seen_fraction(frame: &Frame, tracer: &crate::trace::Tracer, seed: u64) ->
     seen as f32 / (LOOKERS * TARGETS) as f32
 }
 
+/// The pull-push levels a tile of side `size` runs for `--pull-levels` `levels`: at most
+/// log2(size) - 1, so that the coarsest level is 2 x 2 (the shaders' `min(P.pull_levels,
+/// sh - 1)`).
+pub fn pull_levels_run(size: u32, levels: u32) -> u32 {
+    levels.min(size.trailing_zeros().saturating_sub(1))
+}
+
 /// Side of the grid of near-field rays for a tile of `ism_size` texels whose holes pull-push
 /// fills up to `2^pull_levels` texels: the rays land about 0.7 of that apart, so the nearest
 /// surfaces a VPL sees leave no hole pull-push cannot close (13 for 64 texels, 3 levels).
 pub fn near_grid(ism_size: u32, pull_levels: u32) -> u32 {
-    // The levels pull-push runs (Ism::new's clamp).
-    let levels = pull_levels.min(ism_size.trailing_zeros().saturating_sub(1));
-    let hole = 1u32 << levels;
+    let hole = 1u32 << pull_levels_run(ism_size, pull_levels);
     // At most a cell of two texels a side, so that every cell holds its ray's texel.
     (ism_size * 3 / (2 * hole) + 1)
         .clamp(4, 32)
@@ -244,7 +248,7 @@ pub struct Ism {
     size: u32,
     levels: u32,
     max_vpls: u32,
-    /// Tiles may hold an unfinished frame's splats: the next splat clears what it redraws.
+    /// Tiles may hold an unfinished frame's splats: the next splat first clears them all.
     unclean: bool,
 }
 
@@ -268,7 +272,7 @@ impl Ism {
     ) -> Self {
         // The renderer's grid (Params::near_grid), from the levels asked for.
         let cells = near_grid(size, levels) as u64;
-        let levels = levels.min(size.trailing_zeros().saturating_sub(1));
+        let levels = pull_levels_run(size, levels);
         let tile = |l: u32| max_vpls as u64 * ((size >> l) as u64).pow(2);
         let offsets_l: Vec<u64> = (0..=levels + 1)
             .scan(0u64, |acc, l| {
@@ -490,7 +494,7 @@ pub const FUSED_MAX: u32 = 64;
 /// 0: none), each texel the nearer of its own and its cell's, holes filled from up to
 /// `levels` coarser levels; a value is `depth + 4 * level`, -1 a hole left open.
 pub fn pull_push(atlas: &[u32], (n, near): (u32, &[u32]), size: u32, levels: u32) -> Vec<f32> {
-    let levels = levels.min(size.trailing_zeros().saturating_sub(1));
+    let levels = pull_levels_run(size, levels);
     let decoded = |e: u32| {
         if e == 0 {
             -1.0

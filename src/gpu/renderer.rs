@@ -643,6 +643,7 @@ impl Renderer {
         };
         let c = &self.config;
         let (gw, gh) = c.grid();
+        let near_points = self.near_points(input);
         let params = Params {
             width: gw,
             height: gh,
@@ -665,9 +666,9 @@ impl Renderer {
             shift_x: self.interleave_shift.0 % c.interleave,
             shift_y: self.interleave_shift.1 % c.interleave,
             aa: c.aa,
-            near_points: self.near_points(input),
+            near_points,
             textured: self.surface.is_some() as u32,
-            near_grid: if self.near_points(input) > 0 {
+            near_grid: if near_points > 0 {
                 ism::near_grid(c.ism_size, c.pull_levels)
             } else {
                 0
