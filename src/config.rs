@@ -673,6 +673,11 @@ pub struct Render {
     /// measuring what reuse saves; the frames are the same bits)
     #[arg(long)]
     pub no_reuse: bool,
+    /// Draw every triangle in every view (the G-buffer and shadow maps otherwise leave out the
+    /// mesh instances outside the view and the back faces of closed meshes seen from outside,
+    /// which changes nothing they store; for measuring)
+    #[arg(long)]
+    pub no_cull: bool,
 }
 
 /// `--profiling`: how a frame's GPU passes are submitted and timed.
@@ -716,6 +721,7 @@ impl Default for Render {
             components: false,
             profiling: ProfilingChoice::Auto,
             no_reuse: false,
+            no_cull: false,
         }
     }
 }
@@ -1219,6 +1225,7 @@ impl Compare {
             components: false,
             profiling: ProfilingChoice::Auto,
             no_reuse: false,
+            no_cull: false,
         }
     }
 

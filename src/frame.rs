@@ -61,6 +61,7 @@ impl Pipeline {
         let mut renderer = Renderer::new(gpu, rc, &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;
+        renderer.cull = !cfg.no_cull;
         let params = cfg.sampler_params(&scene);
         let sampler = Sampler::new(params.clone());
         let classical = (cfg.method != Method::Instant).then(|| Classical {

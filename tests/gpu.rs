@@ -388,3 +388,86 @@ fn same_seed_bitwise_same_frames_other_seed_other_frames() {
         );
     }
 }
+
+/// Leaving out of the raster passes the instances outside a view and the back faces of closed
+/// meshes (`scene::culling`) leaves the frames as they were: on the Cornell box (two closed
+/// blocks among open walls) seen from its camera, with supersampling; from inside the tall
+/// block, where nothing may be skipped (the block's faces are all back faces from there, and
+/// skipping them would show the lit room through it); and from close to the short block,
+/// where the light, ceiling and a side wall lie outside the view. Only pixels whose sub-sample lies on an edge shared by a front and a back face, which
+/// either may take, or where coplanar faces of two solids meet (the raster's setup differs
+/// between the pipelines, and with it which face wins the depth tie), can differ: measured 0
+/// pixels of 4096 on lavapipe and llvmpipe from each of the three. With the block's faces
+/// skipped from inside all the same, all 4096 differ; with the faces skipped chosen by the
+/// wrong sign of the projection's turn, 773 from the camera; with one of the camera's side
+/// planes turned outward, 3844; with one of a shadow face's, 537.
+#[test]
+fn skipping_back_faces_of_solids_leaves_the_frames_as_they_were() {
+    let scene = builtin::load("cornell").unwrap().unwrap();
+    let frame = scene.at(0.0);
+    let closed = frame.instances.iter().filter(|i| i.closed).count();
+    assert_eq!(closed, 2, "the Cornell box's blocks are closed");
+    // Inside the taller block, looking at one of its side faces.
+    let tall = frame
+        .instances
+        .iter()
+        .filter(|i| i.closed)
+        .max_by(|a, b| (a.hi.y - a.lo.y).total_cmp(&(b.hi.y - b.lo.y)))
+        .unwrap();
+    let centre = (tall.lo + tall.hi) * 0.5;
+    let inside = config::CameraSpec {
+        eye: centre,
+        target: centre + Vec3::X,
+        fov_deg: 60.0,
+    };
+    // Close to the short block, narrowly: the light, the ceiling and a side wall lie outside
+    // the view and are left out.
+    let short = frame
+        .instances
+        .iter()
+        .filter(|i| i.closed)
+        .min_by(|a, b| (a.hi.y - a.lo.y).total_cmp(&(b.hi.y - b.lo.y)))
+        .unwrap();
+    let (c, size) = ((short.lo + short.hi) * 0.5, (short.hi - short.lo).length());
+    let close = config::CameraSpec {
+        eye: c + Vec3::new(0.3, 0.2, 1.0) * size,
+        target: c,
+        fov_deg: 25.0,
+    };
+    for backend in backends() {
+        let views = [
+            ("camera", None, 2),
+            ("inside", Some(inside), 1),
+            ("close", Some(close), 2),
+        ];
+        for (view, camera, aa) in views {
+            let render = |no_cull: bool| {
+                let mut cfg = config(64, 64, 16, 8);
+                cfg.quality.aa = aa;
+                cfg.no_cull = no_cull;
+                cfg.backend = backend;
+                cfg.clamp = Some(0.1);
+                let mut scene = scene.clone();
+                if let Some(c) = camera {
+                    c.apply(&mut scene).unwrap();
+                }
+                let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
+                let mut p = Pipeline::new(gpu, scene, &cfg).unwrap();
+                p.render_frame(0, false).unwrap().image.hdr
+            };
+            let (culled, whole) = (render(false), render(true));
+            let name = format!("{backend:?}-cull-{view}").to_lowercase();
+            let rel = compare(&name, &culled, &whole, 1e-3);
+            let differ = bits(&culled)
+                .chunks(3)
+                .zip(bits(&whole).chunks(3))
+                .filter(|(a, b)| a != b)
+                .count();
+            println!("{name}: {differ} of {} pixels differ", culled.data.len());
+            assert!(
+                differ * 200 <= culled.data.len() && rel <= 1e-3,
+                "{name}: {differ} pixels differ, mean |culled - whole| / mean = {rel}"
+            );
+        }
+    }
+}

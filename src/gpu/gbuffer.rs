@@ -7,6 +7,7 @@
 use super::bindings::{gpu_struct, Elem, Group, Pass};
 use super::common::Tri;
 use super::Gpu;
+use crate::scene::culling::{Draw, View};
 use glam::{Mat4, Vec2, Vec3};
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
@@ -52,6 +53,15 @@ pub(crate) struct Vertex {
 }
 
 impl Vertex {
+    /// The vertex buffer's layout over `attributes` (see [`Vertex::ATTRIBUTES`]).
+    pub(crate) fn layout(attributes: &[wgpu::VertexAttribute]) -> wgpu::VertexBufferLayout<'_> {
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<Vertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes,
+        }
+    }
+
     /// Locations 0 and 1 of the `vs` entry points.
     pub(crate) const ATTRIBUTES: [wgpu::VertexAttribute; 2] = [
         wgpu::VertexAttribute {
@@ -95,8 +105,101 @@ pub(crate) fn uniform_stride<T>(gpu: &Gpu) -> u64 {
         .next_multiple_of(gpu.limits.min_uniform_buffer_offset_alignment as u64)
 }
 
+/// The pipelines of one raster pass by the faces they skip: none, the back ones, the front
+/// ones (for a view whose projection mirrors, where a solid's back faces are the ones that
+/// turn counter-clockwise; see [`skipped_faces`]).
+pub(crate) struct Pipelines([wgpu::RenderPipeline; 3]);
+
+impl Pipelines {
+    pub(crate) fn new(
+        gpu: &Gpu,
+        label: &str,
+        (module, layout): (&wgpu::ShaderModule, &wgpu::BindGroupLayout),
+        target: wgpu::TextureFormat,
+        vertices: wgpu::VertexBufferLayout,
+        entries: (&str, &str),
+    ) -> Self {
+        Pipelines(
+            [None, Some(wgpu::Face::Back), Some(wgpu::Face::Front)].map(|cull| {
+                gpu.raster_pipeline_over(
+                    label,
+                    module,
+                    layout,
+                    target,
+                    vertices.clone(),
+                    entries,
+                    cull,
+                )
+            }),
+        )
+    }
+
+    /// Draws the triangles of `runs` (vertices `3 start .. 3 end`, or indices if `indexed`)
+    /// as each says ([`crate::scene::culling::View::runs`]): `Front` runs skipping the faces
+    /// `skip` names, `All` runs every face.
+    pub(crate) fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        runs: &[(std::ops::Range<u32>, Draw)],
+        skip: wgpu::Face,
+        indexed: bool,
+    ) {
+        for (r, d) in runs {
+            let p = match (d, skip) {
+                (Draw::Front, wgpu::Face::Back) => &self.0[1],
+                (Draw::Front, wgpu::Face::Front) => &self.0[2],
+                _ => &self.0[0],
+            };
+            pass.set_pipeline(p);
+            let v = 3 * r.start..3 * r.end;
+            if indexed {
+                pass.draw_indexed(v, 0, 0..1);
+            } else {
+                pass.draw(v, 0..1);
+            }
+        }
+    }
+}
+
+/// The faces a view skips on a solid seen from outside: its back faces, which the raster
+/// sees turn counter-clockwise (`wgpu::Face::Front` to the pipeline) where the projection
+/// mirrors. The view maps a point `p` to clip `x = r.p + .., y = u.p + .., w = f.p + ..` (or,
+/// orthographic, `w` constant and `f` the viewing direction): a triangle facing the eye,
+/// counter-clockwise seen from it, keeps that turn in normalized device coordinates exactly
+/// when `(r x u).f < 0` (see docs/math.md, "What the raster passes leave out").
+pub(crate) fn skipped_faces(r: Vec3, u: Vec3, f: Vec3) -> wgpu::Face {
+    if r.cross(u).dot(f) < 0.0 {
+        wgpu::Face::Back
+    } else {
+        wgpu::Face::Front
+    }
+}
+
+/// The G-buffer camera's [`skipped_faces`] and [`View`] on a `width x height` image: the
+/// near plane (clip `z >= 0`) and the four side planes (`|x|, |y| <= w`), widened by two
+/// pixels so that every sub-sample tile's jittered frustum lies inside.
+pub(crate) fn camera_view(view_proj: Mat4, width: u32, height: u32) -> (wgpu::Face, View) {
+    let row = |i: usize| view_proj.row(i);
+    let plane = |v: glam::Vec4| (v.truncate(), v.w);
+    let skip = skipped_faces(row(0).truncate(), row(1).truncate(), row(3).truncate());
+    let (kx, ky) = (1.0 + 2.0 / width as f32, 1.0 + 2.0 / height as f32);
+    let sides = vec![
+        plane(row(3) * kx - row(0)),
+        plane(row(3) * kx + row(0)),
+        plane(row(3) * ky - row(1)),
+        plane(row(3) * ky + row(1)),
+    ];
+    (
+        skip,
+        View {
+            near: plane(row(2)),
+            sides,
+        },
+    )
+}
+
 pub struct GBuffer {
-    pipeline: wgpu::RenderPipeline,
+    pipelines: Pipelines,
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pub view: wgpu::TextureView,
@@ -147,7 +250,15 @@ impl GBuffer {
     ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
-        let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
+        let attributes = Vertex::ATTRIBUTES;
+        let pipelines = Pipelines::new(
+            gpu,
+            PASS.name,
+            (&module, &layout),
+            FORMAT,
+            Vertex::layout(&attributes),
+            ("vs", "fs"),
+        );
         let stride = uniform_stride::<Camera>(gpu);
         let uniform = gpu.buffer(
             "gbuffer cameras",
@@ -175,7 +286,7 @@ impl GBuffer {
         )
         .create_view(&Default::default());
         GBuffer {
-            pipeline,
+            pipelines,
             uniform,
             bind_group,
             view,
@@ -187,12 +298,13 @@ impl GBuffer {
         }
     }
 
+    /// Draws the triangles of `runs` (see [`View::runs`]) seen by `view_proj`.
     pub fn encode(
         &self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         vertices: &wgpu::Buffer,
-        count: u32,
+        runs: &[(std::ops::Range<u32>, Draw)],
         view_proj: Mat4,
     ) {
         let (s, w, h) = (self.aa, self.width, self.height);
@@ -211,37 +323,38 @@ impl GBuffer {
             }
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
+        let skip = camera_view(view_proj, w, h).0;
         raster_tiles(
             enc,
             "gbuffer",
-            (&self.pipeline, &self.bind_group),
+            &self.bind_group,
             &tiles,
             (&self.view, &self.depth),
             vertices,
-            count,
+            |pass| self.pipelines.draw(pass, runs, skip, false),
         );
     }
 }
 
-/// One render pass over the scene's triangles into a colour view and a depth view, drawn once
-/// per tile: (dynamic offset of its uniform, viewport x, y, width, height).
+/// One render pass over the scene's triangles into a colour view and a depth view, `draw`n
+/// (pipeline and draw calls) once per tile: (dynamic offset of its uniform, viewport x, y,
+/// width, height).
 pub(crate) fn raster_tiles(
     enc: &mut wgpu::CommandEncoder,
     label: &str,
-    (pipeline, bind_group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
+    bind_group: &wgpu::BindGroup,
     tiles: &[(u32, [u32; 4])],
     (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
     vertices: &wgpu::Buffer,
-    count: u32,
+    draw: impl Fn(&mut wgpu::RenderPass),
 ) {
     let mut pass = begin(enc, label, color, depth);
-    pass.set_pipeline(pipeline);
     pass.set_vertex_buffer(0, vertices.slice(..));
     for &(offset, [x, y, w, h]) in tiles {
         pass.set_bind_group(0, bind_group, &[offset]);
         pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
         pass.set_scissor_rect(x, y, w, h);
-        pass.draw(0..count, 0..1);
+        draw(&mut pass);
     }
 }
 

@@ -340,16 +340,21 @@ impl Gpu {
         target: wgpu::TextureFormat,
     ) -> wgpu::RenderPipeline {
         let attributes = gbuffer::Vertex::ATTRIBUTES;
-        let vertices = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<gbuffer::Vertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &attributes,
-        };
-        self.raster_pipeline_over(label, module, layout, target, vertices, ("vs", "fs"))
+        self.raster_pipeline_over(
+            label,
+            module,
+            layout,
+            target,
+            gbuffer::Vertex::layout(&attributes),
+            ("vs", "fs"),
+            None,
+        )
     }
 
-    /// A render pipeline (entry points `(vs, fs)`, no culling, depth test `Less` on a
-    /// Depth32Float target) over vertices laid out as `vertices`, writing one colour target.
+    /// A render pipeline (entry points `(vs, fs)`, skipping the faces `cull` names, depth
+    /// test `Less` on a Depth32Float target) over vertices laid out as `vertices`, writing one
+    /// colour target.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn raster_pipeline_over(
         &self,
         label: &str,
@@ -358,6 +363,7 @@ impl Gpu {
         target: wgpu::TextureFormat,
         vertices: wgpu::VertexBufferLayout,
         (vs, fs): (&str, &str),
+        cull: Option<wgpu::Face>,
     ) -> wgpu::RenderPipeline {
         let pl = self
             .device
@@ -377,7 +383,7 @@ impl Gpu {
                     buffers: &[Some(vertices)],
                 },
                 primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
+                    cull_mode: cull,
                     ..Default::default()
                 },
                 depth_stencil: Some(wgpu::DepthStencilState {

@@ -119,6 +119,7 @@ impl RadiosityPass {
                 attributes: &attributes,
             },
             ("vs", "fs"),
+            None,
         );
         let stride = super::gbuffer::uniform_stride::<RadCamera>(gpu);
         let camera = gpu.buffer(
@@ -286,11 +287,14 @@ impl RadiosityPass {
             Some(v) if self.count > 0 => super::gbuffer::raster_tiles(
                 enc,
                 "radiosity",
-                (&self.raster, &self.raster_group),
+                &self.raster_group,
                 &tiles,
                 (&self.color, &self.depth),
                 v,
-                self.count,
+                |pass| {
+                    pass.set_pipeline(&self.raster);
+                    pass.draw(0..self.count, 0..1);
+                },
             ),
             // Nothing to draw: the cleared target (no surface anywhere).
             _ => drop(super::gbuffer::begin(

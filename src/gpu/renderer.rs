@@ -172,6 +172,10 @@ pub struct Renderer {
     /// Keep what did not change since the last frame (shadow maps, ISM tiles, uploads);
     /// `false` redraws and uploads everything every frame.
     pub reuse: bool,
+    /// Leave out of the G-buffer and shadow maps the mesh instances outside a view and the
+    /// back faces of closed ones seen from outside (`scene::culling`); `false` draws every
+    /// triangle everywhere. What the passes store is the same either way.
+    pub cull: bool,
     last: Last,
     /// The near-field ray directions in a VPL's frame (see [`ism::near_points`]).
     near_dirs: Vec<Vec3>,
@@ -455,6 +459,7 @@ impl Renderer {
             timestamps,
             staging,
             reuse: true,
+            cull: true,
             last: Last::default(),
             offsets,
             slots,
@@ -702,13 +707,20 @@ impl Renderer {
         (near, far, view_proj): (f32, f32, glam::Mat4),
     ) -> Result<bool> {
         let c = self.config.clone();
-        let count = (self.tri_count * 3) as u32;
+        let tris = self.tri_count as u32;
+        let f = input.frame;
+        let instances: &[crate::scene::culling::Instance] =
+            if self.cull { &f.instances } else { &[] };
         // The passes up to compose run on the sub-sample grid (aa x aa tiles of the output
         // size, each sampling every pixel at one offset; the output itself with aa = 1).
         let (gw, gh) = c.grid();
-        // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample.
+        // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample. The raster passes
+        // leave out the instances outside their view and the back faces of closed ones.
+        let runs = super::gbuffer::camera_view(view_proj, c.width, c.height)
+            .1
+            .runs(instances, tris);
         self.gbuffer
-            .encode(&self.gpu, &mut rec.enc, &self.vertices, count, view_proj);
+            .encode(&self.gpu, &mut rec.enc, &self.vertices, &runs, view_proj);
         rec.end_pass()?;
         // surface: G-buffer, triangles, UVs, colours, textures -> each sample's albedo and
         // emission (scenes with textures or vertex colours; the others use the triangle's).
@@ -722,8 +734,8 @@ impl Renderer {
             &mut rec.enc,
             input.lights,
             (near, far),
-            &self.vertices,
-            count,
+            (&self.vertices, tris),
+            (instances, self.cull),
             !geometry_kept,
         );
         rec.end_pass()?;

@@ -8,7 +8,9 @@
 
 use super::bindings::{dynamic_uniform, gpu_struct, Elem, Group, Pass};
 use super::common::Tri;
-use super::{gbuffer, Gpu};
+use super::gbuffer::{self, skipped_faces};
+use super::Gpu;
+use crate::scene::culling::{Instance, View};
 use crate::scene::{EmitterSample, SampleKind};
 use glam::Vec3;
 
@@ -145,6 +147,23 @@ impl Window {
     }
 }
 
+/// The view of the face with axes `(r, u, f)` at `eye`: in front of its near plane
+/// (`f.(p - eye) >= near`) and, unless it is orthographic, inside its four sides
+/// (`|r.q|, |u.q| <= f.q` for `q = p - eye`, a thousandth wider).
+pub fn face_view((r, u, f): (Vec3, Vec3, Vec3), eye: Vec3, near: f32, ortho: bool) -> View {
+    let plane = |n: Vec3| (n, -n.dot(eye));
+    let (pn, pd) = plane(f);
+    let f = f * 1.001;
+    View {
+        near: (pn, pd - near),
+        sides: if ortho {
+            Vec::new()
+        } else {
+            vec![plane(f - r), plane(f + r), plane(f - u), plane(f + u)]
+        },
+    }
+}
+
 /// One face a shadow map draws: its layer within the sample's five, the axes to draw it with
 /// and the viewport (width, height) it is drawn into.
 pub type DrawnFace = (usize, (Vec3, Vec3, Vec3), [u32; 2]);
@@ -172,7 +191,7 @@ pub fn drawn_faces(s: &EmitterSample, size: u32) -> Vec<DrawnFace> {
 }
 
 pub struct ShadowMaps {
-    pipeline: wgpu::RenderPipeline,
+    pipelines: gbuffer::Pipelines,
     uniform: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     layers: Vec<wgpu::TextureView>,
@@ -190,7 +209,7 @@ pub struct ShadowMaps {
 /// The scene's triangles with their corners shared: each distinct position once, and three
 /// indices a triangle (built anew whenever the geometry moves).
 struct Shared {
-    pipeline: wgpu::RenderPipeline,
+    pipelines: gbuffer::Pipelines,
     positions: wgpu::Buffer,
     indices: wgpu::Buffer,
     /// The last upload's corners and indices (empty before the first).
@@ -250,7 +269,15 @@ impl ShadowMaps {
     ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
-        let pipeline = gpu.raster_pipeline(PASS.name, &module, &layout, FORMAT);
+        let attributes = gbuffer::Vertex::ATTRIBUTES;
+        let pipelines = gbuffer::Pipelines::new(
+            gpu,
+            PASS.name,
+            (&module, &layout),
+            FORMAT,
+            gbuffer::Vertex::layout(&attributes),
+            ("vs", "fs"),
+        );
         let shared = (!cutouts).then(|| {
             let attributes = wgpu::vertex_attr_array![0 => Float32x3];
             let vertices = wgpu::VertexBufferLayout {
@@ -260,10 +287,10 @@ impl ShadowMaps {
             };
             let corners = 3 * triangles.max(1) as u64;
             Shared {
-                pipeline: gpu.raster_pipeline_over(
+                pipelines: gbuffer::Pipelines::new(
+                    gpu,
                     PASS.name,
-                    &module,
-                    &layout,
+                    (&module, &layout),
                     FORMAT,
                     vertices,
                     ("vs_shared", "fs_shared"),
@@ -323,7 +350,7 @@ impl ShadowMaps {
         )
         .create_view(&Default::default());
         ShadowMaps {
-            pipeline,
+            pipelines,
             uniform,
             bind_group,
             layers,
@@ -351,8 +378,9 @@ impl ShadowMaps {
 
     /// Renders the shadow maps of `samples` (the faces [`drawn_faces`] gives, face `k` of
     /// sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
-    /// unless they are the ones last drawn and the geometry did not move. Returns whether it
-    /// drew.
+    /// unless they are the ones last drawn and the geometry did not move. Each face leaves out
+    /// what [`View::runs`] says of the `instances` (if `cull`; else it draws everything).
+    /// Returns whether it drew.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(
         &mut self,
@@ -360,8 +388,8 @@ impl ShadowMaps {
         enc: &mut wgpu::CommandEncoder,
         samples: &[EmitterSample],
         (near, far): (f32, f32),
-        vertices: &wgpu::Buffer,
-        count: u32,
+        (vertices, tris): (&wgpu::Buffer, u32),
+        (instances, cull): (&[Instance], bool),
         geometry_moved: bool,
     ) -> bool {
         let mut bytes = vec![0u8; (self.stride as usize) * samples.len() * 5];
@@ -386,35 +414,36 @@ impl ShadowMaps {
                 let o = (j * 5 + k) * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Face>()]
                     .copy_from_slice(bytemuck::bytes_of(&face));
-                layers.push((j * 5 + k, viewport));
+                let runs = face_view((r, u, f), s.position, near, ortho > 0.0)
+                    .runs(if cull { instances } else { &[] }, tris);
+                layers.push((j * 5 + k, viewport, runs, skipped_faces(r, u, f)));
             }
         }
         if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
             return false;
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
-        for (l, [w, h]) in layers {
+        for (l, [w, h], runs, skip) in layers {
             let tile = [((l as u64 * self.stride) as u32, [0, 0, w, h])];
             let target = (&self.layers[l], &self.depth);
             match &self.shared {
                 Some(s) => {
                     let mut pass = gbuffer::begin(enc, "shadow face", target.0, target.1);
-                    pass.set_pipeline(&s.pipeline);
                     pass.set_bind_group(0, &self.bind_group, &[tile[0].0]);
                     pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
                     pass.set_scissor_rect(0, 0, w, h);
                     pass.set_vertex_buffer(0, s.positions.slice(..));
                     pass.set_index_buffer(s.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..s.corners.1.len() as u32, 0, 0..1);
+                    s.pipelines.draw(&mut pass, &runs, skip, true);
                 }
                 None => gbuffer::raster_tiles(
                     enc,
                     "shadow face",
-                    (&self.pipeline, &self.bind_group),
+                    &self.bind_group,
                     &tile,
                     target,
                     vertices,
-                    count,
+                    |pass| self.pipelines.draw(pass, &runs, skip, false),
                 ),
             }
         }

@@ -363,6 +363,8 @@ impl Mesh {
             normals: self.elems.iter().map(|e| e.normal).collect(),
             areas: self.elems.iter().map(|e| e.area).collect(),
             emitter_of_tri: vec![u32::MAX; tris.len()],
+            // Drawn whole (the elements' raster passes leave nothing out).
+            instances: Vec::new(),
             tris,
             materials: frame.materials.clone(),
             // Elements take their materials' factors (textures are not resolved per element).

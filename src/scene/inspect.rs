@@ -60,6 +60,9 @@ pub struct Inspection {
     pub name: String,
     /// Triangles at t = 0.
     pub triangles: usize,
+    /// Mesh instances at t = 0, and those of closed meshes with their triangles (see
+    /// [`super::culling`]).
+    pub instances: (usize, usize, usize),
     pub emitters: Vec<EmitterInfo>,
     pub lights: Vec<LightInfo>,
     pub cameras: Vec<CameraInfo>,
@@ -121,6 +124,15 @@ pub fn inspect(scene: &Scene) -> Inspection {
     Inspection {
         name: scene.name.clone(),
         triangles: f.tris.len(),
+        instances: (
+            f.instances.len(),
+            f.instances.iter().filter(|i| i.closed).count(),
+            f.instances
+                .iter()
+                .filter(|i| i.closed)
+                .map(|i| i.tris.len())
+                .sum(),
+        ),
         emitters,
         lights,
         cameras,
@@ -197,6 +209,11 @@ impl fmt::Display for Inspection {
         let v = |v: Vec3| format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z);
         writeln!(w, "scene {}", self.name)?;
         writeln!(w, "  triangles   {}", self.triangles)?;
+        writeln!(
+            w,
+            "  instances   {} meshes placed, {} closed ({} triangles: back faces skipped from outside)",
+            self.instances.0, self.instances.1, self.instances.2
+        )?;
         let (lo, hi) = self.bounds;
         writeln!(w, "  bounds      {} to {}", v(lo), v(hi))?;
         for e in &self.emitters {

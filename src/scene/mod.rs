@@ -5,6 +5,7 @@
 pub mod anim;
 pub mod builtin;
 pub mod camera;
+pub mod culling;
 pub mod framing;
 pub mod inspect;
 pub mod lights;
@@ -138,6 +139,8 @@ pub struct Scene {
     pub materials: Arc<Vec<Material>>,
     /// Meshes, each a list of triangle primitives.
     pub meshes: Vec<Vec<Primitive>>,
+    /// For each mesh, whether it is closed ([`culling::is_closed`]).
+    pub closed: Vec<bool>,
     pub nodes: Vec<Node>,
     pub roots: Vec<usize>,
     /// The file's punctual lights, placed by the nodes that refer to them.
@@ -249,6 +252,9 @@ pub struct Frame {
     pub emitters: Emitters,
     /// For each triangle, its index in `emitters.tris`, or `u32::MAX`.
     pub emitter_of_tri: Vec<u32>,
+    /// The mesh instances, in triangle order: what the raster passes may leave out of a view
+    /// ([`culling::View::runs`]).
+    pub instances: Vec<culling::Instance>,
 }
 
 impl Frame {
@@ -481,8 +487,18 @@ impl Scene {
     /// World-space triangles and their materials in depth-first node order. A node whose
     /// world matrix mirrors (negative determinant) has its winding flipped, so that front
     /// faces stay front faces (glTF 2.0 section 3.7.4).
-    fn triangles(&self, world: &[Mat4]) -> (Vec<[Vec3; 3]>, Vec<u32>, Option<TriAttrs>) {
+    #[allow(clippy::type_complexity)]
+    fn triangles(
+        &self,
+        world: &[Mat4],
+    ) -> (
+        Vec<[Vec3; 3]>,
+        Vec<u32>,
+        Option<TriAttrs>,
+        Vec<culling::Instance>,
+    ) {
         let mut tris = Vec::new();
+        let mut instances = Vec::new();
         let mut tri_material = Vec::new();
         let needs_attrs = self.materials.iter().any(Material::varies)
             || self.meshes.iter().flatten().any(|p| p.colors.is_some());
@@ -503,6 +519,7 @@ impl Scene {
             } else {
                 (1, 2)
             };
+            let first = tris.len();
             for prim in &self.meshes[mesh] {
                 let p: Vec<Vec3> = prim
                     .positions
@@ -526,9 +543,20 @@ impl Scene {
                     }
                 }
             }
+            // An affine map keeps a closed mesh closed, its winding put right where it mirrors;
+            // one that flattens it (a zero scale) leaves triangles without area, skipped or not.
+            if tris.len() > first {
+                let (lo, hi) = bounds(tris[first..].iter().flatten().copied());
+                instances.push(culling::Instance {
+                    tris: first as u32..tris.len() as u32,
+                    lo,
+                    hi,
+                    closed: self.closed.get(mesh).copied().unwrap_or(false),
+                });
+            }
         }
         self.add_back_emitters(&mut tris, &mut tri_material, attrs.as_mut());
-        (tris, tri_material, attrs)
+        (tris, tri_material, attrs, instances)
     }
 
     /// For each triangle of a double-sided emitting material, a twin with the opposite
@@ -618,7 +646,7 @@ impl Scene {
     /// Evaluates the scene at time `t` (seconds).
     pub fn at(&self, t: f32) -> Frame {
         let world = self.world_matrices(t);
-        let (tris, tri_material, attrs) = self.triangles(&world);
+        let (tris, tri_material, attrs, instances) = self.triangles(&world);
         let mut normals = Vec::with_capacity(tris.len());
         let mut areas = Vec::with_capacity(tris.len());
         for [a, b, c] in &tris {
@@ -646,6 +674,7 @@ impl Scene {
             attrs: attrs.map(Arc::new),
             camera,
             emitters: Emitters::default(),
+            instances,
         };
         let mut emitters = Emitters::default();
         let mut acc = 0.0f32;

@@ -113,10 +113,15 @@ pub fn load_slice(
     let lights = lights::read(&mut cx, doc)?;
     let mut graph = nodes::read(&mut cx, doc, lights.len())?;
     let channels = animation::read(&mut cx, doc, &buffers, &mut graph.nodes)?;
+    let closed = meshes
+        .iter()
+        .map(|m| super::culling::is_closed(m, &materials))
+        .collect();
     let scene = Scene {
         name: name.to_string(),
         materials: Arc::new(materials),
         meshes,
+        closed,
         nodes: graph.nodes,
         roots: graph.roots,
         lights,

@@ -1,0 +1,283 @@
+//! What the raster passes may leave out of a view (see docs/design.md, "What the raster
+//! passes leave out"): the mesh instances wholly outside its frustum, and the back faces of
+//! closed meshes ("solids": a mesh whose triangles, welded at equal positions, meet two by
+//! two along every edge with opposite windings, and enclose positive volume, so that
+//! counter-clockwise front faces point out). Seen from outside a solid, the nearest surface
+//! along any ray is a front face, so skipping its back faces changes nothing a pass stores;
+//! seen from inside, or cut open by the near plane, it may not skip them.
+
+use super::{Material, Primitive};
+use glam::Vec3;
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// One mesh instance of a frame: its triangles (a run of the frame's triangle order), its
+/// world-space box, and whether its mesh is closed ([`is_closed`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    pub tris: Range<u32>,
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub closed: bool,
+}
+
+/// How a run of triangles is drawn in a view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Draw {
+    /// Not at all: wholly outside the view's frustum.
+    Skip,
+    /// Front faces only: a solid the near plane cuts none of.
+    Front,
+    /// Every face.
+    All,
+}
+
+/// A view, as the culling needs it: its near plane and side planes `(n, d)`, each with the
+/// view's inside at `n.p + d >= 0`. Orthographic views have no side planes here (nothing is
+/// skipped for lying beside them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct View {
+    pub near: (Vec3, f32),
+    pub sides: Vec<(Vec3, f32)>,
+}
+
+impl View {
+    /// How an instance's triangles are drawn: skipped if its box lies wholly outside a side
+    /// plane or wholly behind the near plane; front faces only if it is closed and wholly in
+    /// front of the near plane; else all.
+    pub fn draw(&self, i: &Instance) -> Draw {
+        let (c, h) = ((i.lo + i.hi) * 0.5, (i.hi - i.lo) * 0.5);
+        // The box's range of n.p + d, with a margin of a millionth of its size (so that a
+        // box whose side only touches a plane counts as meeting it).
+        let range = |(n, d): (Vec3, f32)| {
+            let (mid, half) = (n.dot(c) + d, n.abs().dot(h));
+            let tol = 1e-6 * n.length() * (c.length() + h.length());
+            (mid - half - tol, mid + half + tol)
+        };
+        let (lo, hi) = range(self.near);
+        if hi < 0.0 || self.sides.iter().any(|&p| range(p).1 < 0.0) {
+            Draw::Skip
+        } else if i.closed && lo > 0.0 {
+            Draw::Front
+        } else {
+            Draw::All
+        }
+    }
+
+    /// The frame's triangles `0..count` in runs, each drawn as [`View::draw`] says for the
+    /// instance it belongs to (triangles of no instance: all), adjacent runs alike merged and
+    /// skipped ones left out.
+    pub fn runs(&self, instances: &[Instance], count: u32) -> Vec<(Range<u32>, Draw)> {
+        let mut runs: Vec<(Range<u32>, Draw)> = Vec::new();
+        let mut push = |r: Range<u32>, d: Draw| {
+            if r.is_empty() {
+                return;
+            }
+            match runs.last_mut() {
+                Some((last, e)) if *e == d && last.end == r.start => last.end = r.end,
+                _ => runs.push((r, d)),
+            }
+        };
+        let mut at = 0;
+        for i in instances {
+            let r = i.tris.start.clamp(at, count)..i.tris.end.clamp(at, count);
+            push(at..r.start, Draw::All);
+            push(r.clone(), self.draw(i));
+            at = at.max(r.end);
+        }
+        push(at..count, Draw::All);
+        runs.retain(|(_, d)| *d != Draw::Skip);
+        runs
+    }
+}
+
+/// Whether the mesh made of `prims` is closed (see the module's text). A material with an
+/// alpha cut-out opens holes in it, so a mesh with one is not; nor is one with a degenerate
+/// corner (an index out of range) or a corner that is not a finite number.
+pub fn is_closed(prims: &[Primitive], materials: &[Material]) -> bool {
+    let key = |p: Vec3| p.to_array().map(f32::to_bits);
+    let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
+    // Directed edge (a, b) -> how many triangles run along it.
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    let mut volume = 0.0f64;
+    let mut any = false;
+    for prim in prims {
+        let cut = materials
+            .get(prim.material)
+            .is_none_or(|m| m.alpha_cutoff.is_some());
+        if cut {
+            return false;
+        }
+        for t in prim.indices.chunks_exact(3) {
+            let Some(p) = t
+                .iter()
+                .map(|&i| prim.positions.get(i as usize).copied())
+                .collect::<Option<Vec<Vec3>>>()
+            else {
+                return false;
+            };
+            if !p.iter().all(|v| v.is_finite()) {
+                return false;
+            }
+            let mut v = [0u32; 3];
+            for (k, &q) in p.iter().enumerate() {
+                let n = ids.len() as u32;
+                v[k] = *ids.entry(key(q)).or_insert(n);
+            }
+            if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+                return false;
+            }
+            for k in 0..3 {
+                *edges.entry((v[k], v[(k + 1) % 3])).or_default() += 1;
+            }
+            let [a, b, c] = [p[0], p[1], p[2]].map(|q| q.as_dvec3());
+            volume += a.dot(b.cross(c)) / 6.0;
+            any = true;
+        }
+    }
+    any && volume > 0.0
+        && edges
+            .iter()
+            .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit cube's twelve triangles, counter-clockwise seen from outside.
+    fn cube() -> Primitive {
+        let positions = (0..8)
+            .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+            .collect();
+        #[rustfmt::skip]
+        let indices = vec![
+            0, 2, 1, 1, 2, 3, // z = 0, facing -z
+            4, 5, 6, 5, 7, 6, // z = 1
+            0, 1, 4, 1, 5, 4, // y = 0
+            2, 6, 3, 3, 6, 7, // y = 1
+            0, 4, 2, 2, 4, 6, // x = 0
+            1, 3, 5, 3, 7, 5, // x = 1
+        ];
+        Primitive {
+            positions,
+            indices,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_cube_is_closed_and_a_cube_opened_or_turned_inside_out_is_not() {
+        let m = vec![Material::default()];
+        let c = cube();
+        // Every face points out: its normal is along the vector from the centre to it.
+        for t in c.indices.chunks_exact(3) {
+            let [a, b, d] = [0, 1, 2].map(|k| c.positions[t[k] as usize]);
+            let n = (b - a).cross(d - a);
+            assert!(n.dot((a + b + d) / 3.0 - Vec3::splat(0.5)) > 0.0, "{t:?}");
+        }
+        assert!(is_closed(std::slice::from_ref(&c), &m));
+        // Split into two primitives with their own copies of the corners: still closed.
+        let (half0, half1) = c.indices.split_at(18);
+        let part = |idx: &[u32]| Primitive {
+            positions: idx.iter().map(|&i| c.positions[i as usize]).collect(),
+            indices: (0..idx.len() as u32).collect(),
+            ..Default::default()
+        };
+        assert!(is_closed(&[part(half0), part(half1)], &m));
+        // One face missing: open.
+        let mut open = c.clone();
+        open.indices.truncate(30);
+        assert!(!is_closed(&[open], &m));
+        // Inside out: closed but the volume is negative.
+        let mut inv = c.clone();
+        for t in inv.indices.chunks_exact_mut(3) {
+            t.swap(1, 2);
+        }
+        assert!(!is_closed(&[inv], &m));
+        // One triangle flipped: its edges run the same way as its neighbours'.
+        let mut flip = c.clone();
+        flip.indices.swap(1, 2);
+        assert!(!is_closed(&[flip], &m));
+        // A doubled face: each of its edges is used by three triangles.
+        let mut twice = c.clone();
+        twice.indices.extend_from_slice(&[0, 2, 1]);
+        assert!(!is_closed(&[twice], &m));
+        // A cut-out material opens it.
+        let cutout = vec![Material {
+            alpha_cutoff: Some(0.5),
+            ..Default::default()
+        }];
+        assert!(!is_closed(std::slice::from_ref(&c), &cutout));
+        assert!(!is_closed(&[], &m));
+    }
+
+    #[test]
+    fn runs_skip_what_lies_outside_and_back_faces_the_near_plane_does_not_cut() {
+        let inst = |a: u32, b: u32, lo: f32, hi: f32, closed: bool| Instance {
+            tris: a..b,
+            lo: Vec3::splat(lo),
+            hi: Vec3::splat(hi),
+            closed,
+        };
+        let all = [
+            inst(2, 5, 0.0, 1.0, true),
+            inst(5, 9, 3.0, 4.0, true),
+            inst(9, 11, 3.0, 4.0, false),
+            inst(12, 14, 0.0, 1.0, true),
+        ];
+        let view = |near: (Vec3, f32)| View {
+            near,
+            sides: vec![],
+        };
+        use Draw::*;
+        // The near plane x = 10 facing -x, and x = -1 facing +x: every box wholly in front.
+        for near in [(-Vec3::X, 10.0), (Vec3::X, 1.0)] {
+            assert_eq!(
+                view(near).runs(&all, 16),
+                vec![
+                    (0..2, All),
+                    (2..9, Front),
+                    (9..12, All),
+                    (12..14, Front),
+                    (14..16, All)
+                ]
+            );
+        }
+        // The plane x = 3.5 through the second box, and a tilted one just inside its corner
+        // (the box spans 9..12 in x + y + z): that solid is drawn whole; the boxes behind the
+        // plane are skipped.
+        for near in [(Vec3::X, -3.5), (Vec3::ONE, -9.001)] {
+            assert_eq!(
+                view(near).runs(&all, 16),
+                vec![(0..2, All), (5..12, All), (14..16, All)]
+            );
+        }
+        assert_eq!(view((Vec3::ONE, -8.999)).runs(&all, 16)[1], (5..9, Front));
+        // A side plane x <= 2 leaves out the boxes at 3..4.
+        let side = View {
+            near: (Vec3::X, 1.0),
+            sides: vec![(-Vec3::X, 2.0)],
+        };
+        assert_eq!(
+            side.runs(&all, 16),
+            vec![
+                (0..2, All),
+                (2..5, Front),
+                (11..12, All),
+                (12..14, Front),
+                (14..16, All)
+            ]
+        );
+        // A box touching a plane counts as meeting it: drawn whole where it touches the near
+        // plane, drawn where it touches a side plane from outside.
+        let touch = View {
+            near: (Vec3::X, 0.0),
+            sides: vec![(-Vec3::X, 3.0)],
+        };
+        assert_eq!(touch.draw(&all[0]), All);
+        assert_eq!(touch.draw(&all[1]), Front);
+        assert_eq!(view((Vec3::X, 1.0)).runs(&[], 3), vec![(0..3, All)]);
+        assert_eq!(view((Vec3::X, 1.0)).runs(&all, 0), vec![]);
+    }
+}
