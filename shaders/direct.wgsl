@@ -100,18 +100,16 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         let l = vec3f(dot(w, basis_t(ln)), dot(w, basis_b(ln)), cos_l);
         var fc = face_coords(l);
         var zoom = 1.0;
-        // The texels the face was drawn into (a window's viewport is smaller).
-        var texels = vec2f(size);
+        let texels = vec2f(size);
         if kind == 4u {
             zoom = 1.0 / ls.normal.w;
             fc = vec4f(0.0, l.x / l.z * zoom, l.y / l.z * zoom, 0.0);
         }
         if ls.window.z > 0.0 {
             // One face over the window that holds the geometry (`shadow::Window`), drawn
-            // into the viewport of (size / scale) texels, whole numbers.
+            // over the whole map: its texels are 1 / scale as wide as a hemicube face's.
             fc = vec4f(0.0, (l.x / l.z - ls.window.x) * ls.window.z, (l.y / l.z - ls.window.y) * ls.window.w, 0.0);
-            texels = round(size / ls.window.zw);
-            zoom = min(ls.window.z * texels.x, ls.window.w * texels.y) / size;
+            zoom = min(ls.window.z, ls.window.w);
         }
         let texel = clamp(vec2i(floor(vec2f(fc.y * 0.5 + 0.5, 0.5 - 0.5 * fc.z) * texels)), vec2i(0), vec2i(texels) - 1);
         let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u + u32(fc.x)), 0).x);

@@ -183,9 +183,10 @@ fn windowed_shadow_faces_keep_the_direct_light_of_the_twin() {
         let mut p = Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
         let out = p.render_frame(0, true).unwrap();
         let name = format!("{backend:?}-atrium").to_lowercase();
-        // Measured 0.0291 on lavapipe and 0.0298 on llvmpipe with the columns capped (0.0296
-        // and 0.0306 before; 0.0280 and 0.0293 with the hemicube faces that meet the court).
-        let bound = 0.036;
+        // Measured 0.0231 on lavapipe and 0.0241 on llvmpipe with the window drawn over the
+        // whole map; 0.0291 and 0.0298 with it drawn into a viewport of only as many texels
+        // as a hemicube face would give it.
+        let bound = 0.028;
         let rel = compare(
             &format!("{name}-direct"),
             out.image.direct.as_ref().unwrap(),

@@ -82,11 +82,13 @@ pub fn frustum_meets_box(eye: Vec3, (r, u, f): (Vec3, Vec3, Vec3), (lo, hi): (Ve
 /// distance along the normal, in the `(t, b)` axes of `math::basis`) that the geometry its
 /// light can reach projects into: for an area sample or half a point light whose box lies
 /// wholly in front of it and projects into a window no wider than a hemicube face's
-/// (2 x 2). It is drawn into a viewport of `texels`, as many as a hemicube face would give
-/// the window (its resolution follows how much of the sample's view the geometry fills, so a
-/// far emitter's map costs less), the window widened to whole texels. The face's axes are
-/// sheared and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
-/// `shaders/direct.wgsl` reads it (and the viewport there is `size / scale`, rounded).
+/// (2 x 2). It is drawn over the whole map (`texels` = `size` x `size`), so that the window
+/// gets at least a hemicube face's resolution, more where the geometry fills less of the
+/// sample's view. (A viewport of only as many texels as a hemicube face would give the window
+/// cost the same within the noise on lavapipe, in paired runs on the atrium, and left the
+/// direct light 25% further from the twin's; `tests/gpu.rs`.) The face's axes are sheared
+/// and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
+/// `shaders/direct.wgsl` reads it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Window {
     pub centre: glam::Vec2,
@@ -124,15 +126,10 @@ impl Window {
         if half.max_element() > 1.0 {
             return None;
         }
-        // A hemicube face's texels span 2 / size at unit distance: as many over the window.
-        let texels = (half * size as f32)
-            .ceil()
-            .as_uvec2()
-            .clamp(glam::UVec2::ONE, glam::UVec2::splat(size));
         Some(Window {
             centre: (wlo + whi) * 0.5,
-            scale: size as f32 / texels.as_vec2(),
-            texels,
+            scale: 1.0 / half,
+            texels: glam::UVec2::splat(size),
         })
     }
 
@@ -582,15 +579,15 @@ mod tests {
         };
         let faces = drawn_faces(&s, 256);
         assert_eq!(faces.len(), 1);
-        // The window: x and z in [-8/9, 8/9] at unit distance, 1% wider: half-width 0.8978,
-        // 229.8 of a 256-texel hemicube face's texels, so a viewport of 230 and the window
-        // widened to 230 / 256.
+        // The window: x and z in [-8/9, 8/9] at unit distance, 1% wider: half-width
+        // 0.505 * 16/9 = 0.8978, over the whole map.
         let w = Window::of(&s, 256).unwrap();
         assert!(w.centre.abs().max_element() < 1e-6, "{w:?}");
-        assert_eq!(w.texels, glam::UVec2::splat(230));
-        assert_eq!(faces[0].2, [230, 230]);
+        assert_eq!(w.texels, glam::UVec2::splat(256));
+        assert_eq!(faces[0].2, [256, 256]);
+        let half = 0.505 * 16.0 / 9.0;
         assert!(
-            (w.scale - glam::Vec2::splat(256.0 / 230.0))
+            (w.scale - glam::Vec2::splat(1.0 / half))
                 .abs()
                 .max_element()
                 < 1e-5
@@ -599,7 +596,7 @@ mod tests {
         let (r, u, f) = faces[0].1;
         let q = Vec3::new(8.0, 1.0, 8.0) - s.position;
         let ndc = glam::Vec2::new(q.dot(r), q.dot(u)).abs() / q.dot(f);
-        let expected = 8.0 / 9.0 * 256.0 / 230.0;
+        let expected = 8.0 / 9.0 / half;
         assert!(
             (ndc - glam::Vec2::splat(expected)).abs().max_element() < 1e-5,
             "{ndc}"
