@@ -56,6 +56,14 @@ impl Pipeline {
         // Within the adapter's shadow layers, 5 a sample.
         let most = (gpu.limits.max_texture_array_layers / 5).max(1);
         rc.light_samples = cfg.light_samples(&frame0, &tracer, most);
+        let em = &frame0.emitters;
+        if rc.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
+            anyhow::bail!(
+                "--light-samples {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
+                rc.light_samples,
+                scene.name
+            );
+        }
         rc.points_per_vpl = cfg.ism_points(&frame0, &tracer);
         rc.num_points = config::ism_point_set_size(rc.points_per_vpl, frame0.tris.len());
         let mut renderer = Renderer::new(gpu, rc, &frame0)?;

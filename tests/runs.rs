@@ -427,3 +427,69 @@ fn run_json_records_the_budgets_the_scene_chose() {
         std::fs::remove_dir_all(&out).unwrap();
     }
 }
+
+/// run.json says per frame what the raster passes drew: on the atrium at frame 0, the
+/// G-buffer leaves out the instances beside and behind its camera and draws the closed ones'
+/// front faces only, and the shadow faces (the sun's windows, the spot light's face) do the
+/// same; with `--no-cull` they draw every triangle, all faces. On the second frame the sun has
+/// moved, so the shadow faces are drawn again.
+#[test]
+fn run_json_records_what_the_raster_passes_drew() {
+    let drawn = |no_cull: bool| {
+        let out = tmp(if no_cull { "drawn-all" } else { "drawn" });
+        let o = out.to_str().unwrap();
+        let mut args = vec!["render", "atrium", "--size", "16x16", "--frames", "0..2"];
+        args.extend_from_slice(&["--out", o]);
+        // CHEAP, but two light samples: one for the sun, one for the spot light.
+        args.extend_from_slice(CHEAP);
+        let k = args.iter().position(|&a| a == "--light-samples").unwrap();
+        args[k + 1] = "2";
+        if no_cull {
+            args.push("--no-cull");
+        }
+        let r = irad(&args);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+        std::fs::remove_dir_all(&out).unwrap();
+        run["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f["drawn"].clone())
+            .collect::<Vec<_>>()
+    };
+    let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
+    let culled = drawn(false);
+    let whole = drawn(true);
+    for (c, w) in culled.iter().zip(&whole) {
+        let tris = n(c, "triangles");
+        assert_eq!(tris, 133_852, "{c}");
+        // The camera at the west end sees little more than half the arcades' instances.
+        let g = n(c, "gbuffer_triangles");
+        assert!(g < tris * 9 / 10 && g > tris / 4, "{c}");
+        assert!(n(c, "gbuffer_front_only") > g * 9 / 10, "{c}");
+        assert_eq!(n(w, "gbuffer_triangles"), tris, "{w}");
+        assert_eq!(n(w, "gbuffer_front_only"), 0, "{w}");
+        // Two light samples: the sun's one window face, the spot light's one face.
+        let faces = n(c, "shadow_faces");
+        assert_eq!(faces, 2, "{c}");
+        assert_eq!(n(w, "shadow_faces"), faces, "{w}");
+        assert_eq!(n(w, "shadow_triangles"), faces * tris, "{w}");
+        assert!(n(c, "shadow_front_only") > 0, "{c}");
+        assert!(n(c, "shadow_triangles") < n(w, "shadow_triangles"), "{c}");
+    }
+    // One light sample cannot serve both kinds of light: a clear error, not a panic.
+    let out = tmp("one-sample");
+    let mut args = vec!["render", "atrium", "--size", "16x16", "--frames", "0..1"];
+    args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    args.extend_from_slice(CHEAP);
+    let r = irad(&args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success() && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("--light-samples 1") && err.contains("at least 2"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -37,6 +37,9 @@ pub struct FrameRecord {
     pub rss_mib: Option<f64>,
     /// What the GPU kept from the previous frame (uploads, shadow maps, ISM tiles).
     pub reused: crate::gpu::renderer::Reuse,
+    /// What the raster passes drew of the triangles (after leaving out what each view
+    /// cannot see).
+    pub drawn: crate::gpu::renderer::Drawn,
     /// How the GPU passes were timed (timestamps, serialized, off).
     pub profiling: crate::gpu::Profiling,
     /// A classical method: whether this frame solved (else it reused the solution).
@@ -61,6 +64,7 @@ impl FrameRecord {
             mean_rgb: fo.image.hdr.mean().to_array(),
             rss_mib: report::resident_bytes().map(|b| b as f64 / (1 << 20) as f64),
             reused: fo.image.reused,
+            drawn: fo.image.drawn,
             profiling: fo.image.profiling,
             radiosity_solved: fo.solved,
         }

@@ -96,6 +96,8 @@ pub struct RenderedImage {
     pub profiling: Profiling,
     /// What was kept from the previous frame.
     pub reused: Reuse,
+    /// What the raster passes drew.
+    pub drawn: Drawn,
 }
 
 /// The passes of a frame, in order, as timings name them.
@@ -131,6 +133,23 @@ pub struct Reuse {
     /// With `--accumulate`: the indirect light averaged the last frame's history (same
     /// triangles and emitter samples; else it started anew).
     pub history_kept: bool,
+}
+
+/// What the raster passes drew of the frame's triangles, after leaving out what each view
+/// cannot see (`scene::culling`; for run records).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Drawn {
+    /// The frame's triangles.
+    pub triangles: u64,
+    /// Triangles the G-buffer drew (in each sub-sample tile), and of them those drawn front
+    /// faces only.
+    pub gbuffer_triangles: u64,
+    pub gbuffer_front_only: u64,
+    /// Shadow faces drawn this frame (none when the maps were kept), the triangles they drew
+    /// together, and of them those drawn front faces only.
+    pub shadow_faces: u64,
+    pub shadow_triangles: u64,
+    pub shadow_front_only: u64,
 }
 
 /// What the last frame uploaded, to tell what changed.
@@ -176,6 +195,8 @@ pub struct Renderer {
     /// back faces of closed ones seen from outside (`scene::culling`); `false` draws every
     /// triangle everywhere. What the passes store is the same either way.
     pub cull: bool,
+    /// What the last frame's raster passes drew.
+    drawn: Drawn,
     last: Last,
     /// The near-field ray directions in a VPL's frame (see [`ism::near_points`]).
     near_dirs: Vec<Vec3>,
@@ -460,6 +481,7 @@ impl Renderer {
             staging,
             reuse: true,
             cull: true,
+            drawn: Drawn::default(),
             last: Last::default(),
             offsets,
             slots,
@@ -719,6 +741,13 @@ impl Renderer {
         let runs = super::gbuffer::camera_view(view_proj, c.width, c.height)
             .1
             .runs(instances, tris);
+        let (all, front) = crate::scene::culling::counts(&runs);
+        self.drawn = Drawn {
+            triangles: tris as u64,
+            gbuffer_triangles: all,
+            gbuffer_front_only: front,
+            ..Drawn::default()
+        };
         self.gbuffer
             .encode(&self.gpu, &mut rec.enc, &self.vertices, &runs, view_proj);
         rec.end_pass()?;
@@ -738,6 +767,11 @@ impl Renderer {
             (instances, self.cull),
             !geometry_kept,
         );
+        (
+            self.drawn.shadow_faces,
+            self.drawn.shadow_triangles,
+            self.drawn.shadow_front_only,
+        ) = self.shadows.drawn;
         rec.end_pass()?;
         // direct: G-buffer, triangles, emitter samples, hemicubes -> direct light.
         self.direct.encode(&mut rec.enc, gw, gh);
@@ -906,6 +940,7 @@ impl Renderer {
             timings,
             profiling: self.profiling,
             reused: reuse,
+            drawn: self.drawn,
         })
     }
 }

@@ -199,6 +199,9 @@ pub struct ShadowMaps {
     stride: u64,
     /// The faces last drawn.
     last: Option<Vec<u8>>,
+    /// What the last `encode` drew: faces, triangles over them, of those front faces only
+    /// (zero when it kept the maps).
+    pub drawn: (u64, u64, u64),
     /// Scenes without cut-outs draw shared corners through an index buffer.
     shared: Option<Shared>,
 }
@@ -356,6 +359,7 @@ impl ShadowMaps {
             size,
             stride,
             last: None,
+            drawn: (0, 0, 0),
             shared,
         }
     }
@@ -416,8 +420,13 @@ impl ShadowMaps {
                 layers.push((j * 5 + k, viewport, runs, skipped_faces(r, u, f)));
             }
         }
+        self.drawn = (0, 0, 0);
         if bytes.is_empty() || (!geometry_moved && self.last.as_ref() == Some(&bytes)) {
             return false;
+        }
+        for (_, _, runs, _) in &layers {
+            let (all, front) = crate::scene::culling::counts(runs);
+            self.drawn = (self.drawn.0 + 1, self.drawn.1 + all, self.drawn.2 + front);
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
         for (l, [w, h], runs, skip) in layers {

@@ -32,6 +32,14 @@ pub enum Draw {
     All,
 }
 
+/// Triangles in `runs` ([`View::runs`]): all of them, and those drawn front faces only.
+pub fn counts(runs: &[(Range<u32>, Draw)]) -> (u64, u64) {
+    runs.iter().fold((0, 0), |(all, front), (r, d)| {
+        let n = r.len() as u64;
+        (all + n, front + if *d == Draw::Front { n } else { 0 })
+    })
+}
+
 /// A view, as the culling needs it: its near plane and side planes `(n, d)`, each with the
 /// view's inside at `n.p + d >= 0`. Orthographic views have no side planes here (nothing is
 /// skipped for lying beside them).

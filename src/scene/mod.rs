@@ -861,7 +861,10 @@ impl Frame {
         }
         // Too many lights: `k` stratified picks by power; each fits in two slots.
         let share = 1.0 - em.area_share();
-        let budget = ((count as f32 * share).round() as usize).clamp(1, count - has_area as usize);
+        // (With a single sample for both kinds the lights take it: `Pipeline::new` refuses
+        // that count, so this only keeps any other caller from a panic.)
+        let most = count.saturating_sub(has_area as usize).max(1);
+        let budget = ((count as f32 * share).round() as usize).clamp(1, most);
         let k = (budget / 2).max(1);
         let mut r = crate::math::rng(&[seed, 0x9c7a1]);
         for j in 0..k {
