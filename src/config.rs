@@ -675,7 +675,8 @@ pub struct Render {
     pub no_reuse: bool,
     /// Draw every triangle in every view (the G-buffer and shadow maps otherwise leave out the
     /// mesh instances outside the view and the back faces of closed meshes seen from outside,
-    /// which changes nothing they store; for measuring)
+    /// which changes nothing they store but which of two coplanar faces wins a depth tie; for
+    /// measuring)
     #[arg(long)]
     pub no_cull: bool,
 }

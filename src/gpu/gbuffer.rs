@@ -176,8 +176,9 @@ pub(crate) fn skipped_faces(r: Vec3, u: Vec3, f: Vec3) -> wgpu::Face {
 }
 
 /// The G-buffer camera's [`skipped_faces`] and [`View`] on a `width x height` image: the
-/// near plane (clip `z >= 0`) and the four side planes (`|x|, |y| <= w`), widened by two
-/// pixels so that every sub-sample tile's jittered frustum lies inside.
+/// near plane (clip `z >= 0`) and the four side planes (`|x|, |y| <= w`), widened by a pixel
+/// on each side (twice the half pixel a sub-sample tile's jitter moves them) so that every
+/// tile's frustum lies inside.
 pub(crate) fn camera_view(view_proj: Mat4, width: u32, height: u32) -> (wgpu::Face, View) {
     let row = |i: usize| view_proj.row(i);
     let plane = |v: glam::Vec4| (v.truncate(), v.w);

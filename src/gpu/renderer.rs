@@ -193,7 +193,8 @@ pub struct Renderer {
     pub reuse: bool,
     /// Leave out of the G-buffer and shadow maps the mesh instances outside a view and the
     /// back faces of closed ones seen from outside (`scene::culling`); `false` draws every
-    /// triangle everywhere. What the passes store is the same either way.
+    /// triangle everywhere. What the passes store is the same either way, up to which of two
+    /// coplanar faces wins a depth tie.
     pub cull: bool,
     /// What the last frame's raster passes drew.
     drawn: Drawn,

@@ -489,6 +489,71 @@ mod tests {
         Vec3::new(r.random(), r.random(), r.random()) * 2.0 - 1.0
     }
 
+    /// The turn, in normalized device coordinates, of a triangle facing the eye at the origin
+    /// and counter-clockwise seen from it, placed along `f`, as `project` in shadow.wgsl maps
+    /// it (orthographic: x and y without the division).
+    fn ndc_turn((r, u, f): (Vec3, Vec3, Vec3), ortho: bool, rng: &mut impl Rng) -> f32 {
+        let c = f.normalize() * 3.0 + (v(rng) * 0.05);
+        // Corners around c in the plane facing the eye, counter-clockwise seen from it.
+        let (t, b) = crate::math::basis(-c.normalize());
+        let tri = [c + t * 0.1, c + b * 0.1, c - t * 0.1 - b * 0.1];
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        assert!(n.dot(-c) > 0.0, "the triangle faces the eye");
+        let p = tri.map(|q| {
+            let (x, y, w) = (q.dot(r), q.dot(u), q.dot(f));
+            if ortho {
+                glam::Vec2::new(x, y)
+            } else {
+                glam::Vec2::new(x, y) / w
+            }
+        });
+        (p[1] - p[0]).perp_dot(p[2] - p[0])
+    }
+
+    /// `gbuffer::skipped_faces` names the faces that turn clockwise for a triangle facing the
+    /// eye (so the pipeline culls those facing away) on every hemicube face (three of the five
+    /// mirror), the window faces (which mirror) and the orthographic maps, as shadow.wgsl
+    /// projects them; and on the camera's view-projection.
+    #[test]
+    fn the_faces_skipped_are_the_ones_facing_away_on_every_face() {
+        let mut rng = rng(&[41]);
+        let mut mirrored = 0;
+        for _ in 0..200 {
+            let n = v(&mut rng).normalize();
+            let mut faces: Vec<((Vec3, Vec3, Vec3), bool)> =
+                face_bases(n).into_iter().map(|b| (b, false)).collect();
+            faces.extend(face_bases(n).into_iter().map(|b| (b, true)));
+            let w = Window {
+                centre: glam::Vec2::new(0.3, -0.2),
+                scale: glam::Vec2::new(2.0, 3.0),
+                texels: glam::UVec2::splat(256),
+            };
+            faces.push((w.axes(n), false));
+            for (axes, ortho) in faces {
+                let turn = ndc_turn(axes, ortho, &mut rng);
+                let expect = if turn > 0.0 {
+                    wgpu::Face::Back
+                } else {
+                    wgpu::Face::Front
+                };
+                mirrored += (expect == wgpu::Face::Front) as u32;
+                let (r, u, f) = axes;
+                assert_eq!(skipped_faces(r, u, f), expect, "{axes:?} ortho {ortho}");
+            }
+        }
+        // Three of each sample's five hemicube faces mirror, perspective or orthographic, and
+        // the window face (whose axes are (t, b, n) sheared).
+        assert_eq!(mirrored, 200 * 7);
+        // The camera: a right-handed view, its front faces keep their turn.
+        let cam = crate::scene::Camera::look_at(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y, 0.7);
+        let vp = cam.projection(64, 48, 0.01, 100.0) * cam.view();
+        let (skip, view) = gbuffer::camera_view(vp, 64, 48);
+        assert_eq!(skip, wgpu::Face::Back);
+        // Its near plane: the eye behind it, the target in front.
+        let g = |p: Vec3| view.near.0.dot(p) + view.near.1;
+        assert!(g(cam.position) < 0.0 && g(Vec3::ZERO) > 0.0);
+    }
+
     #[test]
     fn shared_corners_rebuild_every_triangle_and_follow_moving_geometry() {
         let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();

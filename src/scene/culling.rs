@@ -3,8 +3,9 @@
 //! closed meshes ("solids": a mesh whose triangles, welded at equal positions, meet two by
 //! two along every edge with opposite windings, and enclose positive volume, so that
 //! counter-clockwise front faces point out). Seen from outside a solid, the nearest surface
-//! along any ray is a front face, so skipping its back faces changes nothing a pass stores;
-//! seen from inside, or cut open by the near plane, it may not skip them.
+//! along any ray is a front face, so skipping its back faces changes nothing a pass stores
+//! (up to depth ties between coplanar faces); seen from inside, or cut open by the near
+//! plane, it may not skip them.
 
 use super::{Material, Primitive};
 use glam::Vec3;
@@ -99,16 +100,20 @@ impl View {
     }
 }
 
-/// Whether the mesh made of `prims` is closed (see the module's text). A material with an
-/// alpha cut-out opens holes in it, so a mesh with one is not; nor is one with a degenerate
-/// corner (an index out of range) or a corner that is not a finite number.
+/// Whether the mesh made of `prims` is closed (see the module's text), each of its separate
+/// pieces enclosing positive volume. A material with an alpha cut-out opens holes in it, so a
+/// mesh with one is not; nor is one with a degenerate corner (an index out of range) or a
+/// corner that is not a finite number. (A hollow solid, whose inner surface faces in, is not
+/// either: culling leaves it whole.)
 pub fn is_closed(prims: &[Primitive], materials: &[Material]) -> bool {
     let key = |p: Vec3| p.to_array().map(f32::to_bits);
     let mut ids: HashMap<[u32; 3], u32> = HashMap::new();
     // Directed edge (a, b) -> how many triangles run along it.
     let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut volume = 0.0f64;
-    let mut any = false;
+    // The pieces (corners joined by triangles), and each triangle's first corner and share of
+    // its piece's volume.
+    let mut parent: Vec<u32> = Vec::new();
+    let mut volumes: Vec<(u32, f64)> = Vec::new();
     for prim in prims {
         let cut = materials
             .get(prim.material)
@@ -131,7 +136,17 @@ pub fn is_closed(prims: &[Primitive], materials: &[Material]) -> bool {
             for (k, &q) in p.iter().enumerate() {
                 let n = ids.len() as u32;
                 v[k] = *ids.entry(key(q)).or_insert(n);
+                if v[k] == parent.len() as u32 {
+                    parent.push(v[k]);
+                }
             }
+            let (r0, r1, r2) = (
+                find(&mut parent, v[0]),
+                find(&mut parent, v[1]),
+                find(&mut parent, v[2]),
+            );
+            parent[r1 as usize] = r0;
+            parent[r2 as usize] = r0;
             if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
                 return false;
             }
@@ -139,14 +154,30 @@ pub fn is_closed(prims: &[Primitive], materials: &[Material]) -> bool {
                 *edges.entry((v[k], v[(k + 1) % 3])).or_default() += 1;
             }
             let [a, b, c] = [p[0], p[1], p[2]].map(|q| q.as_dvec3());
-            volume += a.dot(b.cross(c)) / 6.0;
-            any = true;
+            volumes.push((v[0], a.dot(b.cross(c)) / 6.0));
         }
     }
-    any && volume > 0.0
-        && edges
-            .iter()
-            .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1))
+    let paired = edges
+        .iter()
+        .all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1));
+    // Each piece must enclose positive volume: a mesh of an outward cube and an inside-out
+    // one beside it pairs every edge and sums to a positive volume, yet the second turns its
+    // back faces to the eye.
+    let mut piece: HashMap<u32, f64> = HashMap::new();
+    for &(v, vol) in &volumes {
+        *piece.entry(find(&mut parent, v)).or_default() += vol;
+    }
+    !volumes.is_empty() && paired && piece.values().all(|&v| v > 0.0)
+}
+
+/// The root of `v`'s piece, halving the path on the way.
+fn find(parent: &mut [u32], mut v: u32) -> u32 {
+    while parent[v as usize] != v {
+        let up = parent[parent[v as usize] as usize];
+        parent[v as usize] = up;
+        v = up;
+    }
+    v
 }
 
 #[cfg(test)]
@@ -202,11 +233,26 @@ mod tests {
         for t in inv.indices.chunks_exact_mut(3) {
             t.swap(1, 2);
         }
-        assert!(!is_closed(&[inv], &m));
+        assert!(!is_closed(std::slice::from_ref(&inv), &m));
         // One triangle flipped: its edges run the same way as its neighbours'.
         let mut flip = c.clone();
         flip.indices.swap(1, 2);
         assert!(!is_closed(&[flip], &m));
+        // Two cubes apart, both facing out: closed; one of them inside out (the volumes
+        // still summing to a positive one): not.
+        let moved = |c: &Primitive, by: Vec3, scale: f32| Primitive {
+            positions: c.positions.iter().map(|&p| p * scale + by).collect(),
+            ..c.clone()
+        };
+        let two = |b: &Primitive| {
+            let mut m = c.clone();
+            let base = m.positions.len() as u32;
+            m.positions.extend_from_slice(&b.positions);
+            m.indices.extend(b.indices.iter().map(|&i| i + base));
+            m
+        };
+        assert!(is_closed(&[two(&moved(&c, Vec3::X * 3.0, 0.5))], &m));
+        assert!(!is_closed(&[two(&moved(&inv, Vec3::X * 3.0, 0.5))], &m));
         // A doubled face: each of its edges is used by three triangles.
         let mut twice = c.clone();
         twice.indices.extend_from_slice(&[0, 2, 1]);

@@ -544,7 +544,8 @@ impl Scene {
                 }
             }
             // An affine map keeps a closed mesh closed, its winding put right where it mirrors;
-            // one that flattens it (a zero scale) leaves triangles without area, skipped or not.
+            // one that flattens it (a zero scale) leaves coincident faces turned opposite ways,
+            // of which the one facing the eye is drawn.
             if tris.len() > first {
                 let (lo, hi) = bounds(tris[first..].iter().flatten().copied());
                 instances.push(culling::Instance {
