@@ -404,15 +404,11 @@ fn same_seed_bitwise_same_frames_other_seed_other_frames() {
 fn skipping_back_faces_of_solids_leaves_the_frames_as_they_were() {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
-    let closed = frame.instances.iter().filter(|i| i.closed).count();
-    assert_eq!(closed, 2, "the Cornell box's blocks are closed");
+    let mut blocks: Vec<_> = frame.instances.iter().filter(|i| i.closed).collect();
+    assert_eq!(blocks.len(), 2, "the Cornell box's blocks are closed");
+    blocks.sort_by(|a, b| (a.hi.y - a.lo.y).total_cmp(&(b.hi.y - b.lo.y)));
+    let (short, tall) = (blocks[0], blocks[1]);
     // Inside the taller block, looking at one of its side faces.
-    let tall = frame
-        .instances
-        .iter()
-        .filter(|i| i.closed)
-        .max_by(|a, b| (a.hi.y - a.lo.y).total_cmp(&(b.hi.y - b.lo.y)))
-        .unwrap();
     let centre = (tall.lo + tall.hi) * 0.5;
     let inside = config::CameraSpec {
         eye: centre,
@@ -421,12 +417,6 @@ fn skipping_back_faces_of_solids_leaves_the_frames_as_they_were() {
     };
     // Close to the short block, narrowly: the light, the ceiling and a side wall lie outside
     // the view and are left out.
-    let short = frame
-        .instances
-        .iter()
-        .filter(|i| i.closed)
-        .min_by(|a, b| (a.hi.y - a.lo.y).total_cmp(&(b.hi.y - b.lo.y)))
-        .unwrap();
     let (c, size) = ((short.lo + short.hi) * 0.5, (short.hi - short.lo).length());
     let close = config::CameraSpec {
         eye: c + Vec3::new(0.3, 0.2, 1.0) * size,

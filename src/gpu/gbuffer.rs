@@ -299,14 +299,15 @@ impl GBuffer {
         }
     }
 
-    /// Draws the triangles of `runs` (see [`View::runs`]) seen by `view_proj`.
+    /// Draws the triangles of `runs` (see [`View::runs`]) seen by `view_proj`, culling the
+    /// faces `skip` names in the `Front` runs (both from [`camera_view`]).
     pub fn encode(
         &self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         vertices: &wgpu::Buffer,
         runs: &[(std::ops::Range<u32>, Draw)],
-        view_proj: Mat4,
+        (view_proj, skip): (Mat4, wgpu::Face),
     ) {
         let (s, w, h) = (self.aa, self.width, self.height);
         let mut bytes = vec![0u8; self.stride as usize * (s * s) as usize];
@@ -324,7 +325,6 @@ impl GBuffer {
             }
         }
         gpu.queue.write_buffer(&self.uniform, 0, &bytes);
-        let skip = camera_view(view_proj, w, h).0;
         raster_tiles(
             enc,
             "gbuffer",

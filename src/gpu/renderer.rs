@@ -196,8 +196,6 @@ pub struct Renderer {
     /// triangle everywhere. What the passes store is the same either way, up to which of two
     /// coplanar faces wins a depth tie.
     pub cull: bool,
-    /// What the last frame's raster passes drew.
-    drawn: Drawn,
     last: Last,
     /// The near-field ray directions in a VPL's frame (see [`ism::near_points`]).
     near_dirs: Vec<Vec3>,
@@ -482,7 +480,6 @@ impl Renderer {
             staging,
             reuse: true,
             cull: true,
-            drawn: Drawn::default(),
             last: Last::default(),
             offsets,
             slots,
@@ -720,7 +717,7 @@ impl Renderer {
 
     /// Records the frame's passes in order; each names what it reads and writes. `view_proj`
     /// is the G-buffer's camera, `(near, far)` the ISMs' and hemicubes' depth range. Returns
-    /// whether the shadow maps were kept.
+    /// whether the shadow maps were kept, and what the raster passes drew.
     fn encode_passes(
         &mut self,
         rec: &mut Recorder,
@@ -728,7 +725,7 @@ impl Renderer {
         changed_slots: u32,
         geometry_kept: bool,
         (near, far, view_proj): (f32, f32, glam::Mat4),
-    ) -> Result<bool> {
+    ) -> Result<(bool, Drawn)> {
         let c = self.config.clone();
         let tris = self.tri_count as u32;
         let f = input.frame;
@@ -739,18 +736,22 @@ impl Renderer {
         let (gw, gh) = c.grid();
         // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample. The raster passes
         // leave out the instances outside their view and the back faces of closed ones.
-        let runs = super::gbuffer::camera_view(view_proj, c.width, c.height)
-            .1
-            .runs(instances, tris);
+        let (skip, view) = super::gbuffer::camera_view(view_proj, c.width, c.height);
+        let runs = view.runs(instances, tris);
         let (all, front) = crate::scene::culling::counts(&runs);
-        self.drawn = Drawn {
+        let mut drawn = Drawn {
             triangles: tris as u64,
             gbuffer_triangles: all,
             gbuffer_front_only: front,
             ..Drawn::default()
         };
-        self.gbuffer
-            .encode(&self.gpu, &mut rec.enc, &self.vertices, &runs, view_proj);
+        self.gbuffer.encode(
+            &self.gpu,
+            &mut rec.enc,
+            &self.vertices,
+            &runs,
+            (view_proj, skip),
+        );
         rec.end_pass()?;
         // surface: G-buffer, triangles, UVs, colours, textures -> each sample's albedo and
         // emission (scenes with textures or vertex colours; the others use the triangle's).
@@ -759,7 +760,7 @@ impl Renderer {
         }
         rec.end_pass()?;
         // shadow_maps: vertices, emitter samples -> hemicube distances (kept while still).
-        let drawn = self.shadows.encode(
+        let shadows_drawn = self.shadows.encode(
             &self.gpu,
             &mut rec.enc,
             input.lights,
@@ -769,9 +770,9 @@ impl Renderer {
             !geometry_kept,
         );
         (
-            self.drawn.shadow_faces,
-            self.drawn.shadow_triangles,
-            self.drawn.shadow_front_only,
+            drawn.shadow_faces,
+            drawn.shadow_triangles,
+            drawn.shadow_front_only,
         ) = self.shadows.drawn;
         rec.end_pass()?;
         // direct: G-buffer, triangles, emitter samples, hemicubes -> direct light.
@@ -816,7 +817,7 @@ impl Renderer {
             r.encode(&mut rec.enc, c.width, c.height);
         }
         rec.end_pass()?;
-        Ok(!drawn && !input.lights.is_empty())
+        Ok((!shadows_drawn && !input.lights.is_empty(), drawn))
     }
 
     /// Copies the outputs into the staging buffers in the frame's submission, submits, and
@@ -910,8 +911,10 @@ impl Renderer {
             let mut rec = Recorder::new(&gpu, self.profiling, timestamps.as_ref());
             let ranges = (near, far, view_proj);
             let slots = changed.len() as u32;
-            let kept = self.encode_passes(&mut rec, input, slots, reuse.geometry_kept, ranges)?;
-            Ok::<_, anyhow::Error>((kept, self.read_back(rec, timestamps.as_ref(), components)?))
+            let (kept, drawn) =
+                self.encode_passes(&mut rec, input, slots, reuse.geometry_kept, ranges)?;
+            let out = self.read_back(rec, timestamps.as_ref(), components)?;
+            Ok::<_, anyhow::Error>((kept, drawn, out))
         })();
         self.timestamps = timestamps;
         if recorded.is_err() {
@@ -923,7 +926,7 @@ impl Renderer {
             self.ism.forget();
             self.last = Last::default();
         }
-        let (kept, (hdr, ldr, parts, pass_s)) = recorded?;
+        let (kept, drawn, (hdr, ldr, parts, pass_s)) = recorded?;
         reuse.shadow_maps_kept = kept;
         let gpu_s = t_gpu.elapsed().as_secs_f64();
         // Upload (CPU), each pass, then what the frame's GPU work took beyond the passes
@@ -941,7 +944,7 @@ impl Renderer {
             timings,
             profiling: self.profiling,
             reused: reuse,
-            drawn: self.drawn,
+            drawn,
         })
     }
 }
