@@ -12,7 +12,7 @@ fn main() -> anyhow::Result<()> {
         .ok_or_else(|| anyhow::anyhow!("no built-in scene {name}"))?;
     let frame = scene.at(t);
     let samples = frame.emitter_samples(1, 32);
-    let needed: usize = samples.iter().map(|s| s.faces()).sum();
+    let needed: usize = samples.iter().map(irad::gpu::shadow::faces).sum();
     let faces: Vec<_> = samples.iter().flat_map(|s| drawn_faces(s, 256)).collect();
     let texels: u64 = faces.iter().map(|f| f.2[0] as u64 * f.2[1] as u64).sum();
     println!(

@@ -16,35 +16,7 @@ use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 
-/// The checks every numeric flag goes through, with messages naming the flag.
-pub mod check {
-    use anyhow::{bail, Result};
-    use std::fmt::Display;
-
-    /// `value` must be a finite number in `lo..=hi` (`lo` excluded when `lo_open`).
-    pub fn float(flag: &str, value: f32, lo: f32, lo_open: bool, hi: f32) -> Result<()> {
-        if value.is_nan() {
-            bail!("{flag} NaN is not a number");
-        }
-        if value.is_infinite() {
-            bail!("{flag} {value} is not a finite number");
-        }
-        let low_ok = if lo_open { value > lo } else { value >= lo };
-        if !low_ok || value > hi {
-            let low = if lo_open { ">" } else { ">=" };
-            bail!("{flag} {value} is out of range: it must be {low} {lo} and at most {hi}");
-        }
-        Ok(())
-    }
-
-    /// `value` must be an integer in `lo..=hi`.
-    pub fn int<T: PartialOrd + Display + Copy>(flag: &str, value: T, lo: T, hi: T) -> Result<()> {
-        if value < lo || value > hi {
-            bail!("{flag} {value} is out of range: it must be {lo} to {hi}");
-        }
-        Ok(())
-    }
-}
+pub use crate::check;
 
 /// A half-open frame range `A..B`, or a single frame `N`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -252,6 +224,15 @@ impl CameraSpec {
     }
 }
 
+/// Loads a built-in scene or a glTF file and prints its warnings.
+pub fn load_scene(spec: &str) -> Result<Scene> {
+    let scene = crate::scene::builtin::load_any(spec)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
 /// The sequence every rendering command renders: scene, image size, frames, rate and seed.
 #[derive(Args, Clone, Debug, Serialize)]
 pub struct Sequence {
@@ -302,7 +283,7 @@ impl Sequence {
     }
     /// Loads the scene named (or `default`), prints its warnings, and puts `--camera` in it.
     pub fn load_scene(&self, default: &str) -> Result<Scene> {
-        let mut scene = crate::commands::load_scene(self.scene_or(default))?;
+        let mut scene = load_scene(self.scene_or(default))?;
         if let Some(c) = &self.camera {
             c.apply(&mut scene)?;
         }

@@ -3,6 +3,7 @@
 //! `compensation` (the clamp's bias, after 7), `reference`, `metrics`, `report` (8); `radiosity`: the classical finite-element methods, for
 //! comparison.
 
+pub mod check;
 pub mod cli;
 pub mod commands;
 pub mod compensation;
@@ -10,6 +11,8 @@ pub mod config;
 pub mod frame;
 pub mod gpu;
 pub mod image;
+#[cfg(test)]
+mod layers;
 pub mod math;
 pub mod metrics;
 pub mod radiosity;

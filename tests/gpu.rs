@@ -168,7 +168,7 @@ fn windowed_shadow_faces_keep_the_direct_light_of_the_twin() {
         .iter()
         .map(|s| irad::gpu::shadow::drawn_faces(s, 256).len())
         .sum();
-    let kinds: usize = lights.iter().map(|s| s.faces()).sum();
+    let kinds: usize = lights.iter().map(irad::gpu::shadow::faces).sum();
     assert!(
         drawn * 2 < kinds,
         "{drawn} of {kinds} faces drawn: nothing culled"

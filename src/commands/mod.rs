@@ -38,18 +38,12 @@ pub mod reference;
 pub mod render;
 
 use crate::report;
-use crate::scene::{builtin, Scene};
+use crate::scene::builtin;
 use anyhow::Result;
 use std::path::Path;
 
 /// Loads the scene and prints its warnings.
-pub fn load_scene(spec: &str) -> Result<Scene> {
-    let scene = builtin::load_any(spec)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(scene)
-}
+pub use crate::config::load_scene;
 
 /// `irad scenes`: the built-in scenes and what each stresses; `--generate DIR` writes them;
 /// `irad scenes FILE` inspects one.

@@ -36,6 +36,15 @@ macro_rules! gpu_struct {
         $vis struct $name {
             $($(#[$fm])* $fvis $field: $ty),*
         }
+        $crate::gpu::bindings::gpu_layout!($name { $($field: $ty),* });
+    };
+}
+pub(crate) use gpu_struct;
+
+/// The layout constant `LAYOUT` of a `#[repr(C)]` struct declared elsewhere (by a lower
+/// stage, without the GPU's macros) that WGSL shares: `gpu_layout!(Point { tri: u32, .. })`.
+macro_rules! gpu_layout {
+    ($name:ident { $($field:ident : $ty:ty),* $(,)? }) => {
         impl $name {
             /// This struct's layout, checked against its WGSL twin in a test.
             #[allow(dead_code)]
@@ -52,7 +61,7 @@ macro_rules! gpu_struct {
         }
     };
 }
-pub(crate) use gpu_struct;
+pub(crate) use gpu_layout;
 
 /// What a storage buffer holds: `array<Struct>` or an array of a plain type of this stride.
 #[derive(Debug)]
@@ -296,7 +305,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::compose::PASS,
         &super::temporal::PASS,
         &super::resolve::PASS,
-        &crate::radiosity::hemicube::PASS,
+        &super::hemicube::PASS,
         &super::radiosity::PASS,
     ]
 }

@@ -77,15 +77,7 @@ impl Vertex {
     ];
 }
 
-/// Sub-sample (i, j) of `s x s` in a pixel: its offset from the pixel's top-left corner, in
-/// pixels (x right, y down). The `s^2` offsets are a rotated lattice: one in each cell of the
-/// pixel's `s x s` grid and, in x and in y alike, one in each of `s^2` equal strips (n-rooks),
-/// so that an edge parallel to an image axis is resolved to `1/s^2` of a pixel. `s = 1`: the
-/// centre.
-pub fn subsample(i: u32, j: u32, s: u32) -> Vec2 {
-    let (i, j, s) = (i as f32, j as f32, s as f32);
-    Vec2::new((i + (j + 0.5) / s) / s, (j + (s - i - 0.5) / s) / s)
-}
+pub use crate::scene::camera::subsample;
 
 /// `view_proj` for a `width x height` viewport moved so that its pixel centres sample the
 /// image at offset `o` (see [`subsample`]) inside each pixel instead of at the centre.

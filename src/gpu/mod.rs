@@ -8,6 +8,7 @@ pub mod compose;
 pub mod direct;
 pub mod gather;
 pub mod gbuffer;
+pub mod hemicube;
 pub mod interleave;
 pub mod ism;
 pub mod profile;

@@ -16,7 +16,6 @@ fn layout(gpu: &Gpu, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgp
         })
 }
 use crate::image::Hdr;
-use crate::radiosity::display::Shaded;
 use crate::scene::Frame;
 use anyhow::Result;
 use glam::{Mat4, Vec3};
@@ -68,6 +67,14 @@ fn layout_of(
         .map(|i| PASS.groups[0].bindings[i].layout_entry(i as u32, stages))
         .collect();
     layout(gpu, label, &entries)
+}
+
+/// What the pass draws of a solution: its elements as triangles and the reflected radiance
+/// at each element's three corners (Gouraud), from `radiosity::display::Shaded`.
+#[derive(Clone, Copy)]
+pub struct Gouraud<'a> {
+    pub elements: &'a Frame,
+    pub corners: &'a [[glam::Vec3; 3]],
 }
 
 pub struct RadiosityPass {
@@ -205,14 +212,15 @@ impl RadiosityPass {
 
     /// Uploads a shaded solution (done once per solve; the camera may move freely after),
     /// emission included.
-    pub fn upload(&mut self, gpu: &Gpu, shaded: &Shaded) {
+    pub fn upload<'a>(&mut self, gpu: &Gpu, shaded: impl Into<Gouraud<'a>>) {
         self.upload_with(gpu, shaded, true);
     }
 
     /// Uploads a shaded solution, with or without the elements' emission (without: when
     /// another pass, such as `compose`, adds the emission).
-    pub fn upload_with(&mut self, gpu: &Gpu, shaded: &Shaded, emission: bool) {
-        let f = &shaded.elements;
+    pub fn upload_with<'a>(&mut self, gpu: &Gpu, shaded: impl Into<Gouraud<'a>>, emission: bool) {
+        let shaded = shaded.into();
+        let f = shaded.elements;
         let verts: Vec<Vertex> = (0..f.tris.len())
             .flat_map(|e| {
                 let le = if emission {

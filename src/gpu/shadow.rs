@@ -56,6 +56,17 @@ pub(crate) const PASS: Pass = Pass {
     }],
 };
 
+/// Shadow-map faces a sample needs (of a hemicube's five; they come first): one for a
+/// directional light and for a spot whose cone fits the front face, else five.
+pub fn faces(s: &EmitterSample) -> usize {
+    match s.kind {
+        SampleKind::Directional { .. } | SampleKind::PointCone { .. } => 1,
+        // The front face holds every direction within 45 degrees of the axis.
+        SampleKind::Spot { cos_outer, .. } if cos_outer >= std::f32::consts::FRAC_1_SQRT_2 => 1,
+        _ => 5,
+    }
+}
+
 /// (right, up, forward) of the five hemicube faces around `n`; must match `face_coords` in
 /// `shaders/direct.wgsl`.
 pub fn face_bases(n: Vec3) -> [(Vec3, Vec3, Vec3); 5] {
@@ -177,10 +188,10 @@ pub fn drawn_faces(s: &EmitterSample, size: u32) -> Vec<DrawnFace> {
         SampleKind::PointCone { tan_half } => 1.0 / tan_half,
         _ => 1.0,
     };
-    let single = s.faces() == 1;
+    let single = faces(s) == 1;
     face_bases(s.normal)
         .into_iter()
-        .take(s.faces())
+        .take(faces(s))
         .enumerate()
         .filter(|&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
         .map(|(k, (r, u, f))| (k, (r * zoom, u * zoom, f), [size; 2]))

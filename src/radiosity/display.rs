@@ -21,6 +21,15 @@ pub struct Shaded {
     pub tracer: Tracer,
 }
 
+impl<'a> From<&'a Shaded> for crate::gpu::radiosity::Gouraud<'a> {
+    fn from(s: &'a Shaded) -> Self {
+        crate::gpu::radiosity::Gouraud {
+            elements: &s.elements,
+            corners: &s.corners,
+        }
+    }
+}
+
 impl Shaded {
     pub fn new(frame: &Frame, sol: &Solution, part: Part) -> Shaded {
         let values = sol.display_values(part);

@@ -2,6 +2,20 @@
 
 use glam::{Mat4, Vec2, Vec3};
 
+/// The narrowest and widest vertical fields of view irad renders (radians): at 0 every ray is
+/// the same, at pi the image plane is infinitely wide.
+pub const FOV_RANGE: (f32, f32) = (1e-3, 3.1);
+
+/// Sub-sample (i, j) of `s x s` in a pixel: its offset from the pixel's top-left corner, in
+/// pixels (x right, y down). The `s^2` offsets are a rotated lattice: one in each cell of the
+/// pixel's `s x s` grid and, in x and in y alike, one in each of `s^2` equal strips (n-rooks),
+/// so that an edge parallel to an image axis is resolved to `1/s^2` of a pixel. `s = 1`: the
+/// centre. (The G-buffer's sub-sample tiles and the CPU's edge rays sample the same offsets.)
+pub fn subsample(i: u32, j: u32, s: u32) -> Vec2 {
+    let (i, j, s) = (i as f32, j as f32, s as f32);
+    Vec2::new((i + (j + 0.5) / s) / s, (j + (s - i - 0.5) / s) / s)
+}
+
 /// A pinhole perspective camera in world space. Image row 0 is at the top; the aspect ratio
 /// is the image's (width / height), the vertical field of view is the camera's.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,7 +65,7 @@ impl Camera {
     /// accepts (a camera scaled to zero or a field of view of 0 or pi is not).
     pub fn is_valid(&self) -> bool {
         let unit = |v: Vec3| v.is_finite() && (v.length() - 1.0).abs() < 1e-3;
-        let (lo, hi) = crate::scene::load::FOV_RANGE;
+        let (lo, hi) = FOV_RANGE;
         self.position.is_finite()
             && unit(self.forward)
             && unit(self.up)

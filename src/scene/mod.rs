@@ -16,6 +16,10 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::sync::Arc;
 
+/// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
+/// distances and areas overflow 32-bit floats.
+pub const MAX_COORD: f32 = 1e9;
+
 pub use anim::{Channel, Interpolation, Property};
 pub use camera::Camera;
 pub use lights::{LightDef, LightKind, PunctualLight};
@@ -400,7 +404,7 @@ impl Scene {
     /// instead of the file's camera (up is +Y, or +Z when looking straight up or down). The
     /// message says which of the three is wrong.
     pub fn set_camera(&mut self, eye: Vec3, target: Vec3, yfov: f32) -> Result<(), String> {
-        let lim = load::MAX_COORD;
+        let lim = MAX_COORD;
         for (what, p) in [("eye", eye), ("target", target)] {
             if !p.is_finite() || p.abs().max_element() > lim {
                 return Err(format!(
@@ -412,7 +416,7 @@ impl Scene {
         if d.length() <= 1e-6 * eye.abs().max_element().max(1.0) {
             return Err(format!("the eye and the target are the same point {eye}"));
         }
-        let (lo, hi) = load::FOV_RANGE;
+        let (lo, hi) = camera::FOV_RANGE;
         if !(lo..=hi).contains(&yfov) {
             return Err(format!(
                 "the field of view {yfov} rad ({:.1} degrees) is outside {lo}..{hi} rad",
@@ -785,17 +789,6 @@ impl EmitterSample {
             SampleKind::Directional { .. } => unreachable!(),
         };
         (f > 0.0).then(|| (self.radiance * (f * cos_x / d2), self.position, nl))
-    }
-
-    /// Shadow-map faces this sample needs (of a hemicube's five; they come first): one
-    /// for a directional light and for a spot whose cone fits the front face, else five.
-    pub fn faces(&self) -> usize {
-        match self.kind {
-            SampleKind::Directional { .. } | SampleKind::PointCone { .. } => 1,
-            // The front face holds every direction within 45 degrees of the axis.
-            SampleKind::Spot { cos_outer, .. } if cos_outer >= std::f32::consts::FRAC_1_SQRT_2 => 1,
-            _ => 5,
-        }
     }
 }
 

@@ -11,7 +11,7 @@
 //! `Frame::emission_at`).
 
 use super::Tracer;
-use crate::gpu::gbuffer::subsample;
+use crate::scene::camera::subsample;
 use crate::scene::Frame;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;

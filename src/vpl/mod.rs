@@ -2,6 +2,7 @@
 //! picks the frame's VPLs and their weights.
 
 pub mod importance;
+pub mod ism_points;
 pub mod paths;
 pub mod sampler;
 

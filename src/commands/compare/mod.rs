@@ -18,7 +18,7 @@ use anyhow::Result;
 /// `irad compare`, on one GPU device for all its runs.
 pub fn compare(cfg: &config::Compare) -> Result<()> {
     let plan = plan::Plan::new(cfg)?;
-    let pb = crate::report::progress(plan.work_units(), "compare");
+    let pb = crate::report::progress(work_units(&plan), "compare");
     let reference = reference_cache::load_or_render(&plan, &|| pb.inc(1))?;
     let motion = plan.motion();
     let floor = crate::metrics::floor::floor(
@@ -31,4 +31,12 @@ pub fn compare(cfg: &config::Compare) -> Result<()> {
     let results = runs::run_all(&plan, &reference.frames, &motion, &|| pb.inc(1))?;
     pb.finish_and_clear();
     outputs::write(&plan, &reference.frames, &floor, &results)
+}
+
+/// The progress bar's length: reference rows still to trace, plus every run's frames.
+fn work_units(plan: &plan::Plan) -> u64 {
+    // Each missing image of either half is traced row by row.
+    let missing = reference_cache::missing(plan) as u64;
+    let runs = plan.runs().len() as u64;
+    missing * plan.cfg.sequence.size.height as u64 + runs * plan.numbers.len() as u64
 }

@@ -7,7 +7,7 @@ use crate::radiosity::Method;
 use crate::scene::Scene;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 pub struct Plan {
@@ -65,7 +65,7 @@ impl Plan {
             }
         }
         crate::report::prepare_out_dir(&cfg.out)?;
-        let cache = super::reference_cache::dir(cfg, &spec);
+        let cache = dir(cfg, &spec);
         crate::report::prepare_out_dir(&cache)?;
         Ok(Plan {
             cfg: cfg.clone(),
@@ -121,14 +121,6 @@ impl Plan {
         runs
     }
 
-    /// The progress bar's length: reference rows still to trace, plus every run's frames.
-    pub fn work_units(&self) -> u64 {
-        // Each missing image of either half is traced row by row.
-        let missing = super::reference_cache::missing(self) as u64;
-        let runs = self.runs().len() as u64;
-        missing * self.cfg.sequence.size.height as u64 + runs * self.numbers.len() as u64
-    }
-
     /// Where each frame's pixels were in the frame before (for warped flicker), from the
     /// scene's exact motion.
     pub fn motion(&self) -> Vec<Vec<Option<crate::metrics::warp::Warp>>> {
@@ -140,4 +132,57 @@ impl Plan {
             .collect();
         crate::metrics::warp::motion(&frames, s.size.width, s.size.height)
     }
+}
+
+/// The two halves' samples per pixel for a reference of `spp` (at least 2).
+pub fn halves(spp: u32) -> [u32; 2] {
+    [spp.div_ceil(2), spp / 2]
+}
+
+/// The cache folder of a reference.
+pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
+    let name: String = Path::new(spec)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| spec.to_string())
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let s = &cfg.sequence;
+    // A --camera of its own: the same scene seen from elsewhere.
+    let camera = s
+        .camera
+        .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
+        .unwrap_or_default();
+    let [a, b] = halves(cfg.spp);
+    cfg.cache.join("reference").join(format!(
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}",
+        source_hash(spec),
+        s.size,
+        cfg.spp,
+        s.fps,
+        s.seed
+    ))
+}
+
+/// FNV-1a of the scene's source: a built-in's generated text, else the file's bytes (0 if
+/// unreadable: loading the scene reports that).
+fn source_hash(spec: &str) -> u64 {
+    let bytes = crate::scene::builtin::generate(spec)
+        .map(String::into_bytes)
+        .or_else(|| std::fs::read(spec).ok())
+        .unwrap_or_default();
+    fnv(&bytes)
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }

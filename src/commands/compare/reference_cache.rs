@@ -9,16 +9,11 @@
 //! file of the same name, gets a reference of its own, and so does another `--camera`. Caches written before the halves (one
 //! image a frame, folder name without `_halves`) are never matched, so never misread.
 
-use super::plan::Plan;
+use super::plan::{halves, Plan};
 use crate::config;
 use crate::image::Hdr;
 use anyhow::{bail, Result};
-use std::path::{Path, PathBuf};
-
-/// The two halves' samples per pixel for a reference of `spp` (at least 2).
-pub fn halves(spp: u32) -> [u32; 2] {
-    [spp.div_ceil(2), spp / 2]
-}
+use std::path::PathBuf;
 
 /// The seed of half `h` (0: a, 1: b) of a reference traced with `seed`: two independent
 /// streams, neither equal to `seed`'s own nor to another seed's halves.
@@ -32,54 +27,6 @@ pub struct Reference {
     pub frames: Vec<Hdr>,
     pub halves: [Vec<Hdr>; 2],
     pub spp: [u32; 2],
-}
-
-/// The cache folder of a reference.
-pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
-    let name: String = Path::new(spec)
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| spec.to_string())
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    let s = &cfg.sequence;
-    // A --camera of its own: the same scene seen from elsewhere.
-    let camera = s
-        .camera
-        .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
-        .unwrap_or_default();
-    let [a, b] = halves(cfg.spp);
-    cfg.cache.join("reference").join(format!(
-        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}",
-        source_hash(spec),
-        s.size,
-        cfg.spp,
-        s.fps,
-        s.seed
-    ))
-}
-
-/// FNV-1a of the scene's source: a built-in's generated text, else the file's bytes (0 if
-/// unreadable: loading the scene reports that).
-fn source_hash(spec: &str) -> u64 {
-    let bytes = crate::scene::builtin::generate(spec)
-        .map(String::into_bytes)
-        .or_else(|| std::fs::read(spec).ok())
-        .unwrap_or_default();
-    fnv(&bytes)
-}
-
-fn fnv(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-    })
 }
 
 const HALF: [&str; 2] = ["a", "b"];
@@ -183,6 +130,7 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Reference
 
 #[cfg(test)]
 mod tests {
+    use super::super::plan::dir;
     use super::*;
 
     #[test]

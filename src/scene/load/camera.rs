@@ -3,9 +3,7 @@
 use super::{Ctx, LoadError};
 use crate::scene::CameraDef;
 
-/// The narrowest and widest vertical fields of view irad renders (radians): at 0 every ray is
-/// the same, at pi the image plane is infinitely wide.
-pub const FOV_RANGE: (f32, f32) = (1e-3, 3.1);
+pub use crate::scene::camera::FOV_RANGE;
 
 /// A perspective camera, or None (with a warning) for an orthographic one.
 pub(super) fn read(cx: &mut Ctx, c: &gltf::Camera) -> Result<Option<CameraDef>, LoadError> {

@@ -41,9 +41,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_texture_transform",
 ];
 
-/// The largest coordinate irad accepts, in a mesh or in the world: beyond it, squared
-/// distances and areas overflow 32-bit floats.
-pub const MAX_COORD: f32 = 1e9;
+pub use crate::scene::MAX_COORD;
 
 /// The most triangles a scene may instance (each costs about 100 bytes per frame).
 pub const MAX_TRIANGLES: usize = 1 << 24;
