@@ -40,7 +40,7 @@ fn main() -> anyhow::Result<()> {
     let scene = irad::commands::load_scene(cfg.scene_name())?;
     let f: u32 = a[2].parse()?;
     let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
-    let dmin = cfg.dmin(&scene);
+    let dmin = irad::resolve::dmin(&cfg, &scene);
     let gpu = std::sync::Arc::new(Gpu::new(cfg.backend)?);
     let mut p = Pipeline::new(gpu, scene.clone(), &cfg)?;
     let o = p.render_frame(f, true)?;

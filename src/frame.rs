@@ -3,7 +3,7 @@
 use crate::config;
 use crate::gpu::radiosity::RadiosityPass;
 use crate::gpu::{Gpu, GpuFrame, RenderedImage, Renderer};
-use crate::radiosity::{self, Method};
+use crate::radiosity;
 use crate::scene::Scene;
 use crate::trace::Tracer;
 pub use crate::vpl::sampler::SamplerKind;
@@ -52,28 +52,15 @@ impl Pipeline {
         cfg.validate()?;
         let frame0 = scene.at(0.0);
         let tracer = Tracer::new(&frame0);
-        let mut rc = cfg.renderer_config(frame0.tris.len());
-        // Within the adapter's shadow layers, 5 a sample.
-        let most = (gpu.limits.max_texture_array_layers / 5).max(1);
-        rc.light_samples = cfg.light_samples(&frame0, &tracer, most);
-        let em = &frame0.emitters;
-        if rc.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
-            anyhow::bail!(
-                "--light-samples {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
-                rc.light_samples,
-                scene.name
-            );
-        }
-        rc.points_per_vpl = cfg.ism_points(&frame0, &tracer);
-        rc.num_points = config::ism_point_set_size(rc.points_per_vpl, frame0.tris.len());
-        let mut renderer = Renderer::new(gpu, rc, &frame0)?;
+        let resolved = crate::resolve::resolve(cfg, &scene, &frame0, &tracer, &gpu.limits)?;
+        let mut renderer = Renderer::new(gpu, resolved.renderer, &frame0)?;
         renderer.profiling = cfg.profiling.on(&renderer.gpu);
         renderer.reuse = !cfg.no_reuse;
         renderer.cull = !cfg.no_cull;
-        let params = cfg.sampler_params(&scene);
+        let params = resolved.sampler;
         let sampler = Sampler::new(params.clone());
-        let classical = (cfg.method != Method::Instant).then(|| Classical {
-            settings: cfg.radiosity_settings(&scene),
+        let classical = resolved.radiosity.map(|settings| Classical {
+            settings,
             cache: radiosity::Cache::default(),
             // The same sub-samples per pixel as the frame it adds to (checked against the
             // adapter with the renderer's).

@@ -22,6 +22,7 @@ pub const LAYERS: &[&[&str]] = &[
     &["compensation"],
     &["radiosity"],
     &["config"],
+    &["resolve"],
     &["frame"],
     &["metrics"],
     &["report"],

@@ -18,6 +18,7 @@ pub mod metrics;
 pub mod radiosity;
 pub mod reference;
 pub mod report;
+pub mod resolve;
 pub mod scene;
 pub mod trace;
 pub mod vpl;

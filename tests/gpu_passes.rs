@@ -241,7 +241,12 @@ fn interleaved(
     c.quality.interleave = n;
     // The filter's tests hold it to pixel-centre twins: one sample per pixel.
     c.quality.aa = 1;
-    irad::gpu::Renderer::new(gpu.clone(), c.renderer_config(frame.tris.len()), frame).unwrap()
+    irad::gpu::Renderer::new(
+        gpu.clone(),
+        irad::resolve::bounds(&c, frame.tris.len()),
+        frame,
+    )
+    .unwrap()
 }
 
 /// The indirect image of `vpls` (no direct light).

@@ -399,7 +399,7 @@ fn run_json_records_the_budgets_the_scene_chose() {
     let f = scene.at(0.0);
     let tracer = irad::trace::Tracer::new(&f);
     let seen = irad::gpu::ism::seen_fraction(&f, &tracer, 1);
-    let want = irad::config::ism_points_for(64, 3, seen, f.tris.len());
+    let want = irad::resolve::ism_points_for(64, 3, seen, f.tris.len());
     assert!((64..4096).contains(&want), "{want}");
     for (vpls, interleave) in [("64", 4), ("4096", 8)] {
         let out = tmp(&format!("budgets{vpls}"));

@@ -118,7 +118,9 @@ struct RunRecord<'a> {
     scene: &'a str,
     adapter: &'a AdapterDesc,
     settings: &'a config::Render,
+    /// What the resolve step chose for the scene and adapter (`crate::resolve`).
     gpu: &'a crate::gpu::RendererConfig,
+    sampler: &'a crate::vpl::sampler::SamplerParams,
     frames_rendered: u32,
     mean: &'a StageMeans,
     frames: Vec<serde_json::Value>,
@@ -176,6 +178,7 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             adapter: &adapter,
             settings: cfg,
             gpu: &pipeline.renderer.config,
+            sampler: &pipeline.params,
             frames_rendered: frames.len(),
             mean: &means,
             frames: read_json_lines(&out.join("frames.jsonl"))?,

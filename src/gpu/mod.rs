@@ -23,7 +23,7 @@ use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
 pub use profile::Profiling;
-pub use renderer::{GpuFrame, RenderedImage, Renderer, RendererConfig};
+pub use renderer::{graph, GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.
 pub const COMMON_WGSL: &str = include_str!("../../shaders/common.wgsl");

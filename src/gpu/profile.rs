@@ -86,10 +86,12 @@ impl Timestamps {
         }
     }
 
-    /// Resolves the timestamps into the staging buffer (map it after the submission).
-    pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
-        enc.resolve_query_set(&self.set, 0..self.count, &self.resolve, 0);
-        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, self.count as u64 * 8);
+    /// Resolves the first `used` timestamps into the staging buffer (map it after the
+    /// submission).
+    pub(crate) fn resolve(&self, enc: &mut wgpu::CommandEncoder, used: u32) {
+        let used = used.min(self.count);
+        enc.resolve_query_set(&self.set, 0..used, &self.resolve, 0);
+        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, used as u64 * 8);
     }
 
     /// Seconds of each pass from the mapped staging buffer's ticks.
@@ -108,8 +110,9 @@ pub(crate) struct Recorder<'a> {
     mode: Profiling,
     timestamps: Option<&'a Timestamps>,
     pub(crate) enc: wgpu::CommandEncoder,
-    pass: u32,
     t0: Instant,
+    /// The passes ended, in order.
+    pub(crate) passes: Vec<&'static str>,
     /// Serialized: seconds per pass, in order.
     pub(crate) cpu: Vec<f64>,
 }
@@ -126,19 +129,19 @@ impl<'a> Recorder<'a> {
             mode,
             timestamps,
             enc,
-            pass: 0,
             t0: Instant::now(),
+            passes: Vec::new(),
             cpu: Vec::new(),
         }
     }
 
-    /// Ends the current pass: a timestamp, or (serialized) a submission and a wait.
-    pub(crate) fn end_pass(&mut self) -> Result<()> {
-        self.pass += 1;
+    /// Ends the pass `name`: a timestamp, or (serialized) a submission and a wait.
+    pub(crate) fn end_pass(&mut self, name: &'static str) -> Result<()> {
+        self.passes.push(name);
         match self.mode {
             Profiling::Timestamps => {
                 if let Some(t) = self.timestamps {
-                    self.enc.write_timestamp(&t.set, self.pass);
+                    self.enc.write_timestamp(&t.set, self.passes.len() as u32);
                 }
             }
             Profiling::Serialized => {
@@ -160,7 +163,7 @@ impl<'a> Recorder<'a> {
     /// Submits what is recorded, with the timestamps resolved.
     pub(crate) fn submit(mut self) {
         if let Some(t) = self.timestamps {
-            t.resolve(&mut self.enc);
+            t.resolve(&mut self.enc, self.passes.len() as u32 + 1);
         }
         self.gpu.queue.submit([self.enc.finish()]);
     }

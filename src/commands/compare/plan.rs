@@ -55,12 +55,18 @@ impl Plan {
         let triangles = scene.at(0.0).tris.len();
         for &v in &cfg.vpls {
             let r = cfg.run(cfg.samplers[0], v);
-            crate::gpu::renderer::check_config(&r.renderer_config(triangles), &gpu.limits)?;
+            crate::gpu::renderer::check_config(
+                &crate::resolve::bounds(&r, triangles),
+                &gpu.limits,
+            )?;
             for sw in &cfg.sweep {
                 for &x in &sw.values {
                     let r = cfg.run_with(sw.sampler, v, Some((sw.knob, x)));
-                    crate::gpu::renderer::check_config(&r.renderer_config(triangles), &gpu.limits)
-                        .map_err(|e| anyhow::anyhow!("--sweep {sw}: {e}"))?;
+                    crate::gpu::renderer::check_config(
+                        &crate::resolve::bounds(&r, triangles),
+                        &gpu.limits,
+                    )
+                    .map_err(|e| anyhow::anyhow!("--sweep {sw}: {e}"))?;
                 }
             }
         }

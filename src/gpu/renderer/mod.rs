@@ -4,6 +4,8 @@
 //! pixels) and reads the frame back, all in one submission (or, profiling without timestamp queries,
 //! one per pass: see `profile`).
 
+pub mod graph;
+
 use super::bindings::bytes;
 use super::common::{LightSample, Params, Tri, Vpl};
 use super::gbuffer::Vertex;
@@ -17,6 +19,7 @@ use crate::scene::{EmitterSample, Frame};
 use crate::vpl::ShadedVpl;
 use anyhow::{bail, Result};
 use glam::Vec3;
+use graph::GRAPH;
 use std::time::Instant;
 
 /// Sizes and quality settings of the GPU renderer.
@@ -100,20 +103,16 @@ pub struct RenderedImage {
     pub drawn: Drawn,
 }
 
-/// The passes of a frame, in order, as timings name them.
-pub const PASSES: [&str; 11] = [
-    "gbuffer",
-    "surface",
-    "shadow_maps",
-    "direct",
-    "ism_splat",
-    "ism_pullpush",
-    "gather",
-    "interleave",
-    "temporal",
-    "compose",
-    "resolve",
-];
+/// The passes of a frame, in order, as timings name them (from [`GRAPH`]).
+pub const PASSES: [&str; GRAPH.len()] = {
+    let mut names = [""; GRAPH.len()];
+    let mut i = 0;
+    while i < GRAPH.len() {
+        names[i] = GRAPH[i].name;
+        i += 1;
+    }
+    names
+};
 
 /// What a frame reused from the previous one (for run records).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -211,22 +210,22 @@ pub struct Renderer {
     vertices: wgpu::Buffer,
     vpls: wgpu::Buffer,
     lights: wgpu::Buffer,
-    gbuffer: GBuffer,
+    pub(crate) gbuffer: GBuffer,
     /// Each sample's albedo and emission (scenes with textures or vertex colours).
-    surface: Option<super::surface::SurfacePass>,
-    shadows: ShadowMaps,
-    direct: Direct,
-    ism: ism::Ism,
-    gather: Gather,
+    pub(crate) surface: Option<super::surface::SurfacePass>,
+    pub(crate) shadows: ShadowMaps,
+    pub(crate) direct: Direct,
+    pub(crate) ism: ism::Ism,
+    pub(crate) gather: Gather,
     /// The interleaved gather's filter (`interleave > 1`).
-    interleave: Option<Interleave>,
+    pub(crate) interleave: Option<Interleave>,
     /// The interleave pattern's shift in x and y (from the seed; each below `interleave`).
     pub interleave_shift: (u32, u32),
     /// Temporal accumulation of the indirect light (`accumulate > 1`).
-    temporal: Option<Temporal>,
-    compose: Compose,
+    pub(crate) temporal: Option<Temporal>,
+    pub(crate) compose: Compose,
     /// The box filter of the sub-samples into pixels (`aa > 1`).
-    resolve: Option<Resolve>,
+    pub(crate) resolve: Option<Resolve>,
 }
 
 /// The checks that must pass before anything renders: sizes against the adapter's limits.
@@ -296,16 +295,22 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
     Ok(())
 }
 
-impl Renderer {
-    /// Builds every pass for frames of `tri_count` triangles; `points_frame` places the ISM
-    /// point set (by area) once.
-    pub fn new(
-        gpu: std::sync::Arc<Gpu>,
-        config: RendererConfig,
-        points_frame: &Frame,
-    ) -> Result<Renderer> {
-        check_config(&config, &gpu.limits)?;
-        let c = &config;
+/// The buffers the passes share, sized for the scene and the settings.
+struct Shared {
+    params: wgpu::Buffer,
+    tris: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    vpls: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    /// The ISM point set followed by the slots' near-field points.
+    points: wgpu::Buffer,
+    offsets: Vec<u32>,
+    slots: wgpu::Buffer,
+    near_dirs: Vec<Vec3>,
+}
+
+impl Shared {
+    fn new(gpu: &Gpu, c: &RendererConfig, points_frame: &Frame) -> Result<Shared> {
         let tri_count = points_frame.tris.len();
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let params = gpu.buffer(
@@ -352,65 +357,95 @@ impl Renderer {
             bytes::<[u32; 2]>(c.max_vpls as u64),
             storage,
         );
+        Ok(Shared {
+            params,
+            tris,
+            vertices,
+            vpls,
+            lights,
+            points: points_buf,
+            offsets,
+            slots,
+            near_dirs,
+        })
+    }
+}
+
+/// The passes of [`GRAPH`], built over the shared buffers.
+struct Passes {
+    gbuffer: GBuffer,
+    surface: Option<super::surface::SurfacePass>,
+    shadows: ShadowMaps,
+    direct: Direct,
+    ism: ism::Ism,
+    gather: Gather,
+    interleave: Option<Interleave>,
+    temporal: Option<Temporal>,
+    compose: Compose,
+    resolve: Option<Resolve>,
+}
+
+impl Passes {
+    fn new(gpu: &Gpu, c: &RendererConfig, points_frame: &Frame, b: &Shared) -> Result<Passes> {
         // Every pass before `resolve` runs on the sub-sample grid.
         let (gw, gh) = c.grid();
         let pixels = gw as u64 * gh as u64;
         let out_pixels = c.width as u64 * c.height as u64;
-        let texture_data = super::surface::TextureData::new(&gpu, points_frame)?;
-        let gbuffer = GBuffer::new(&gpu, (c.width, c.height, c.aa), &texture_data, &tris);
+        let texture_data = super::surface::TextureData::new(gpu, points_frame)?;
+        let gbuffer = GBuffer::new(gpu, (c.width, c.height, c.aa), &texture_data, &b.tris);
         let surface_buf = gpu.buffer(
             "surface",
             bytes::<super::common::Surface>(pixels),
             wgpu::BufferUsages::STORAGE,
         );
         let surface = super::surface::SurfacePass::new(
-            &gpu,
+            gpu,
             &texture_data,
-            &params,
-            &tris,
+            &b.params,
+            &b.tris,
             (&gbuffer.view, &surface_buf),
         );
         let shadows = ShadowMaps::new(
-            &gpu,
+            gpu,
             (c.shadow_size, c.light_samples),
-            (tri_count as u32, points_frame.has_cutouts()),
+            (points_frame.tris.len() as u32, points_frame.has_cutouts()),
             &texture_data,
-            &tris,
+            &b.tris,
         );
         let direct = Direct::new(
-            &gpu,
-            &params,
-            &tris,
-            &lights,
+            gpu,
+            &b.params,
+            &b.tris,
+            &b.lights,
             &shadows.array_view,
             (&gbuffer.view, &surface_buf),
             pixels,
         );
         let ism = ism::Ism::new(
-            &gpu,
-            &params,
-            &tris,
-            &points_buf,
-            &vpls,
-            &slots,
+            gpu,
+            &b.params,
+            &b.tris,
+            &b.points,
+            &b.vpls,
+            &b.slots,
             c.max_vpls,
             c.ism_size,
             c.pull_levels,
         );
         let gather = Gather::new(
-            &gpu,
-            &params,
-            &tris,
-            &vpls,
+            gpu,
+            &b.params,
+            &b.tris,
+            &b.vpls,
             &ism.pyramid,
             (&gbuffer.view, &surface_buf),
             pixels,
         );
         let interleave = (c.interleave > 1).then(|| {
             Interleave::new(
-                &gpu,
-                &params,
-                &tris,
+                gpu,
+                &b.params,
+                &b.tris,
                 (&gbuffer.view, &surface_buf),
                 &gather.output,
                 pixels,
@@ -429,9 +464,9 @@ impl Renderer {
         }
         let temporal = (c.accumulate > 1).then(|| {
             Temporal::new(
-                &gpu,
-                &params,
-                &tris,
+                gpu,
+                &b.params,
+                &b.tris,
                 &gbuffer.view,
                 indirect,
                 tile0,
@@ -440,9 +475,9 @@ impl Renderer {
         });
         let indirect = temporal.as_ref().map_or(indirect, |t| &t.output);
         let compose = Compose::new(
-            &gpu,
-            &params,
-            &tris,
+            gpu,
+            &b.params,
+            &b.tris,
             (&gbuffer.view, &surface_buf),
             (&direct.output, indirect),
             pixels,
@@ -450,29 +485,63 @@ impl Renderer {
         );
         let resolve = (c.aa > 1).then(|| {
             Resolve::new(
-                &gpu,
-                &params,
+                gpu,
+                &b.params,
                 (&compose.hdr, &direct.output, &compose.indirect_ss),
                 out_pixels,
             )
         });
+        Ok(Passes {
+            gbuffer,
+            surface,
+            shadows,
+            direct,
+            ism,
+            gather,
+            interleave,
+            temporal,
+            compose,
+            resolve,
+        })
+    }
+}
+
+impl Staging {
+    fn new(gpu: &Gpu, pixels: u64) -> Staging {
+        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+        Staging {
+            hdr: gpu.buffer("hdr readback", bytes::<[f32; 4]>(pixels), read),
+            ldr: gpu.buffer("ldr readback", bytes::<u32>(pixels), read),
+            direct: gpu.buffer("direct readback", bytes::<[f32; 4]>(pixels), read),
+            indirect: gpu.buffer("indirect readback", bytes::<[f32; 4]>(pixels), read),
+        }
+    }
+}
+
+impl Renderer {
+    /// Builds every pass for frames of `points_frame`'s triangles; `points_frame` places the
+    /// ISM point set (by area) once.
+    pub fn new(
+        gpu: std::sync::Arc<Gpu>,
+        config: RendererConfig,
+        points_frame: &Frame,
+    ) -> Result<Renderer> {
+        check_config(&config, &gpu.limits)?;
+        let c = &config;
+        let b = Shared::new(&gpu, c, points_frame)?;
+        let p = Passes::new(&gpu, c, points_frame, &b)?;
+        // The interleave pattern's shift, from the seed.
         let h = crate::math::mix64(c.seed ^ 0x1e7e_a5ed_0000_0009);
         let interleave_shift = (
             (h % c.interleave as u64) as u32,
             ((h >> 32) % c.interleave as u64) as u32,
         );
-        let read = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
-        let staging = Staging {
-            hdr: gpu.buffer("hdr readback", bytes::<[f32; 4]>(out_pixels), read),
-            ldr: gpu.buffer("ldr readback", bytes::<u32>(out_pixels), read),
-            direct: gpu.buffer("direct readback", bytes::<[f32; 4]>(out_pixels), read),
-            indirect: gpu.buffer("indirect readback", bytes::<[f32; 4]>(out_pixels), read),
-        };
+        let staging = Staging::new(&gpu, c.width as u64 * c.height as u64);
         let timestamps = has_timestamps(&gpu).then(|| Timestamps::new(&gpu, PASSES.len() as u32));
         let profiling = Profiling::default_for(&gpu);
         Ok(Renderer {
-            near_dirs,
-            points: points_buf.clone(),
+            near_dirs: b.near_dirs,
+            points: b.points,
             gpu,
             config,
             profiling,
@@ -481,25 +550,25 @@ impl Renderer {
             reuse: true,
             cull: true,
             last: Last::default(),
-            offsets,
-            slots,
-            tri_count,
-            params,
-            tris,
-            vertices,
-            vpls,
-            lights,
-            gbuffer,
-            surface,
-            shadows,
-            direct,
-            ism,
-            gather,
-            interleave,
+            offsets: b.offsets,
+            slots: b.slots,
+            tri_count: points_frame.tris.len(),
+            params: b.params,
+            tris: b.tris,
+            vertices: b.vertices,
+            vpls: b.vpls,
+            lights: b.lights,
+            gbuffer: p.gbuffer,
+            surface: p.surface,
+            shadows: p.shadows,
+            direct: p.direct,
+            ism: p.ism,
+            gather: p.gather,
+            interleave: p.interleave,
             interleave_shift,
-            temporal,
-            compose,
-            resolve,
+            temporal: p.temporal,
+            compose: p.compose,
+            resolve: p.resolve,
         })
     }
 
@@ -511,7 +580,7 @@ impl Renderer {
     }
 
     /// Near-field points per slot this frame: all of [`Self::near_directions`], or none.
-    fn near_points(&self, input: &GpuFrame) -> u32 {
+    pub(crate) fn near_points(&self, input: &GpuFrame) -> u32 {
         if input.near.is_empty() {
             0
         } else {
@@ -715,109 +784,85 @@ impl Renderer {
         Ok((changed, reuse))
     }
 
-    /// Records the frame's passes in order; each names what it reads and writes. `view_proj`
-    /// is the G-buffer's camera, `(near, far)` the ISMs' and hemicubes' depth range. Returns
-    /// whether the shadow maps were kept, and what the raster passes drew.
-    fn encode_passes(
-        &mut self,
-        rec: &mut Recorder,
-        input: &GpuFrame,
-        changed_slots: u32,
-        geometry_kept: bool,
-        (near, far, view_proj): (f32, f32, glam::Mat4),
-    ) -> Result<(bool, Drawn)> {
-        let c = self.config.clone();
+    /// Records the frame's passes in the order of [`GRAPH`], those that run in this renderer.
+    /// Returns whether the shadow maps were kept, what the raster passes drew, and the names
+    /// of the passes recorded.
+    fn encode_passes(&mut self, rec: &mut Recorder, f: &mut graph::Frame) -> Result<(bool, Drawn)> {
+        for p in &GRAPH {
+            if p.runs(self) {
+                p.encode(self, &mut rec.enc, f)?;
+                rec.end_pass(p.name)?;
+            }
+        }
+        Ok((!f.shadows_drawn && !f.input.lights.is_empty(), f.drawn))
+    }
+
+    /// gbuffer: what the camera sees of the frame's instances, drawn into the G-buffer.
+    pub(crate) fn encode_gbuffer(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
+        let c = &self.config;
         let tris = self.tri_count as u32;
-        let f = input.frame;
-        let instances: &[crate::scene::culling::Instance] =
-            if self.cull { &f.instances } else { &[] };
-        // The passes up to compose run on the sub-sample grid (aa x aa tiles of the output
-        // size, each sampling every pixel at one offset; the output itself with aa = 1).
-        let (gw, gh) = c.grid();
-        // gbuffer: vertices -> G-buffer (position, triangle) per sub-sample. The raster passes
-        // leave out the instances outside their view and the back faces of closed ones.
-        let (skip, view) = super::gbuffer::camera_view(view_proj, c.width, c.height);
+        let instances: &[crate::scene::culling::Instance] = if self.cull {
+            &f.input.frame.instances
+        } else {
+            &[]
+        };
+        // The raster passes leave out the instances outside their view and the back faces of
+        // closed ones.
+        let (skip, view) = super::gbuffer::camera_view(f.view_proj, c.width, c.height);
         let runs = view.runs(instances, tris);
         let (all, front) = crate::scene::culling::counts(&runs);
-        let mut drawn = Drawn {
-            triangles: tris as u64,
-            gbuffer_triangles: all,
-            gbuffer_front_only: front,
-            ..Drawn::default()
+        f.drawn.triangles = tris as u64;
+        (f.drawn.gbuffer_triangles, f.drawn.gbuffer_front_only) = (all, front);
+        self.gbuffer
+            .encode(&self.gpu, enc, &self.vertices, &runs, (f.view_proj, skip));
+    }
+
+    /// shadow_maps: the emitter samples' hemicube faces (kept while the geometry is still).
+    pub(crate) fn encode_shadows(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
+        let instances: &[crate::scene::culling::Instance] = if self.cull {
+            &f.input.frame.instances
+        } else {
+            &[]
         };
-        self.gbuffer.encode(
+        f.shadows_drawn = self.shadows.encode(
             &self.gpu,
-            &mut rec.enc,
-            &self.vertices,
-            &runs,
-            (view_proj, skip),
-        );
-        rec.end_pass()?;
-        // surface: G-buffer, triangles, UVs, colours, textures -> each sample's albedo and
-        // emission (scenes with textures or vertex colours; the others use the triangle's).
-        if let Some(s) = &self.surface {
-            s.encode(&mut rec.enc, gw, gh);
-        }
-        rec.end_pass()?;
-        // shadow_maps: vertices, emitter samples -> hemicube distances (kept while still).
-        let shadows_drawn = self.shadows.encode(
-            &self.gpu,
-            &mut rec.enc,
-            input.lights,
-            (near, far),
-            (&self.vertices, tris),
+            enc,
+            f.input.lights,
+            (f.near, f.far),
+            (&self.vertices, self.tri_count as u32),
             (instances, self.cull),
-            !geometry_kept,
+            !f.geometry_kept,
         );
-        (
-            drawn.shadow_faces,
-            drawn.shadow_triangles,
-            drawn.shadow_front_only,
-        ) = self.shadows.drawn;
-        rec.end_pass()?;
-        // direct: G-buffer, triangles, emitter samples, hemicubes -> direct light.
-        self.direct.encode(&mut rec.enc, gw, gh);
-        rec.end_pass()?;
-        // ism_splat: point set, VPLs, changed slots -> ISM atlas tiles of those slots.
-        self.ism.encode_splat(
-            &mut rec.enc,
-            changed_slots,
-            c.points_per_vpl + self.near_points(input),
-        );
-        rec.end_pass()?;
-        // ism_pullpush: ISM atlas -> hole-filled pyramid of the changed slots.
-        self.ism.encode_pull_push(&mut rec.enc, changed_slots);
-        rec.end_pass()?;
-        // gather: G-buffer, triangles, VPLs, ISM pyramid -> indirect light; supersampled, at
-        // one sample per pixel (tile 0 of the grid), the albedo left to compose.
-        let (iw, ih) = if c.aa > 1 {
+        let d = &mut f.drawn;
+        (d.shadow_faces, d.shadow_triangles, d.shadow_front_only) = self.shadows.drawn;
+    }
+
+    /// The size the indirect light is gathered at: supersampled, one sample per pixel (tile
+    /// 0 of the grid, the albedo left to compose); else the grid.
+    pub(crate) fn indirect_size(&self) -> (u32, u32) {
+        let c = &self.config;
+        if c.aa > 1 {
             (c.width, c.height)
         } else {
-            (gw, gh)
+            c.grid()
+        }
+    }
+
+    /// The indirect light the passes leave: the output of the last pass of [`GRAPH`] that
+    /// writes `indirect` and runs here.
+    fn indirect(&self) -> &wgpu::Buffer {
+        let output = |name: &str| match name {
+            "gather" => Some(&self.gather.output),
+            "interleave" => self.interleave.as_ref().map(|p| &p.output),
+            "temporal" => self.temporal.as_ref().map(|p| &p.output),
+            _ => None,
         };
-        self.gather.encode(&mut rec.enc, (iw, ih), c.interleave);
-        rec.end_pass()?;
-        // interleave: G-buffer, triangles, subset sums -> filtered indirect light (N > 1).
-        if let Some(f) = &self.interleave {
-            f.encode(&mut rec.enc, iw, ih);
-        }
-        rec.end_pass()?;
-        // temporal: G-buffer, indirect light, last frame's history -> indirect light averaged
-        // over frames, this frame's history (accumulate > 1).
-        if let Some(t) = &mut self.temporal {
-            t.encode(&mut rec.enc, iw, ih);
-        }
-        rec.end_pass()?;
-        // compose: G-buffer (emission), direct, indirect -> HDR frame and 8-bit preview
-        // (supersampled: each sub-sample's indirect light from its pixel's, no preview).
-        self.compose.encode(&mut rec.enc, gw, gh);
-        rec.end_pass()?;
-        // resolve: sub-samples of the frame and its parts -> box-filtered pixels (aa > 1).
-        if let Some(r) = &self.resolve {
-            r.encode(&mut rec.enc, c.width, c.height);
-        }
-        rec.end_pass()?;
-        Ok((!shadows_drawn && !input.lights.is_empty(), drawn))
+        GRAPH
+            .iter()
+            .rev()
+            .filter(|p| p.writes.contains(&"indirect"))
+            .find_map(|p| output(p.name))
+            .unwrap_or(&self.gather.output)
     }
 
     /// Copies the outputs into the staging buffers in the frame's submission, submits, and
@@ -829,24 +874,19 @@ impl Renderer {
         mut rec: Recorder,
         timestamps: Option<&Timestamps>,
         components: bool,
-    ) -> Result<(Hdr, Vec<u8>, Option<(Hdr, Hdr)>, Vec<f64>)> {
+    ) -> Result<(Hdr, Vec<u8>, Option<(Hdr, Hdr)>, Vec<(&'static str, f64)>)> {
         let c = &self.config;
         let pixels = c.width as u64 * c.height as u64;
         let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
         let st = &self.staging;
         // The frame and its parts at the output size: resolved, or (aa = 1) as composed.
-        let indirect = self
-            .interleave
-            .as_ref()
-            .map_or(&self.gather.output, |f| &f.output);
-        let indirect = self.temporal.as_ref().map_or(indirect, |t| &t.output);
         let (hdr, ldr, direct, indirect) = match &self.resolve {
             Some(r) => (&r.hdr, &r.ldr, &r.direct, &r.indirect),
             None => (
                 &self.compose.hdr,
                 &self.compose.ldr,
                 &self.direct.output,
-                indirect,
+                self.indirect(),
             ),
         };
         let mut reads = vec![(hdr, &st.hdr, hdr_bytes)];
@@ -859,11 +899,13 @@ impl Renderer {
             rec.enc.copy_buffer_to_buffer(src, 0, dst, 0, size);
         }
         let serialized = std::mem::take(&mut rec.cpu);
+        // The timestamps of every pass ended are resolved at the submission.
+        let passes = rec.passes.clone();
         rec.submit();
         let mut mapped: Vec<(&wgpu::Buffer, u64)> = reads.iter().map(|r| (r.1, r.2)).collect();
         let stamped = self.profiling == Profiling::Timestamps && timestamps.is_some();
         if let (true, Some(t)) = (stamped, timestamps) {
-            mapped.push((&t.staging, (PASSES.len() as u64 + 1) * 8));
+            mapped.push((&t.staging, (passes.len() as u64 + 1) * 8));
         }
         let mut data = read_mapped(&self.gpu, &mapped)?;
         let pass_s = match (stamped, timestamps) {
@@ -873,6 +915,7 @@ impl Renderer {
             }
             _ => serialized,
         };
+        let pass_s = passes.into_iter().zip(pass_s).collect();
         let to_hdr = |bytes: &[u8]| -> Hdr {
             let v: &[[f32; 4]] = bytemuck::cast_slice(bytes);
             Hdr {
@@ -909,10 +952,17 @@ impl Renderer {
         let (gpu, timestamps) = (self.gpu.clone(), self.timestamps.take());
         let recorded = (|| {
             let mut rec = Recorder::new(&gpu, self.profiling, timestamps.as_ref());
-            let ranges = (near, far, view_proj);
-            let slots = changed.len() as u32;
-            let (kept, drawn) =
-                self.encode_passes(&mut rec, input, slots, reuse.geometry_kept, ranges)?;
+            let mut f = graph::Frame {
+                input,
+                changed_slots: changed.len() as u32,
+                geometry_kept: reuse.geometry_kept,
+                near,
+                far,
+                view_proj,
+                drawn: Drawn::default(),
+                shadows_drawn: false,
+            };
+            let (kept, drawn) = self.encode_passes(&mut rec, &mut f)?;
             let out = self.read_back(rec, timestamps.as_ref(), components)?;
             Ok::<_, anyhow::Error>((kept, drawn, out))
         })();
@@ -931,9 +981,18 @@ impl Renderer {
         let gpu_s = t_gpu.elapsed().as_secs_f64();
         // Upload (CPU), each pass, then what the frame's GPU work took beyond the passes
         // (submission, copies, mapping; without per-pass times: all of the GPU work).
+        // Every pass of the graph by name (0 for those that did not run here), when the
+        // passes were timed.
         let mut timings = vec![("upload", upload_s)];
-        timings.extend(PASSES.iter().copied().zip(pass_s.iter().copied()));
-        let in_passes: f64 = pass_s.iter().sum();
+        let timed = !pass_s.is_empty();
+        timings.extend(GRAPH.iter().filter(|_| timed).map(|p| {
+            let s = pass_s
+                .iter()
+                .find(|(n, _)| *n == p.name)
+                .map_or(0.0, |t| t.1);
+            (p.name, s)
+        }));
+        let in_passes: f64 = pass_s.iter().map(|t| t.1).sum();
         timings.push(("readback", (gpu_s - in_passes).max(0.0)));
         let (direct, indirect) = parts.map_or((None, None), |(d, i)| (Some(d), Some(i)));
         Ok(RenderedImage {
@@ -954,7 +1013,7 @@ mod tests {
     use super::*;
 
     fn config(width: u32, height: u32, aa: u32) -> RendererConfig {
-        crate::config::Render {
+        let r = crate::config::Render {
             sequence: crate::config::Sequence {
                 size: crate::config::Size { width, height },
                 ..Default::default()
@@ -964,8 +1023,8 @@ mod tests {
                 ..Default::default()
             },
             ..Default::default()
-        }
-        .renderer_config(36)
+        };
+        crate::resolve::bounds(&r, 36)
     }
 
     /// The supersampled buffers are checked against the adapter: a grid past its textures or

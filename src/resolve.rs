@@ -1,0 +1,372 @@
+//! One resolve step: a render's settings, its scene and its adapter in, every budget the
+//! renderer and the sampler use out ([`Resolved`]), chosen before anything is built and
+//! recorded in `run.json`. What `0` (from the scene) means for each setting is here: the
+//! emitter samples from the direct light's variance where the camera looks ([`light_samples`]),
+//! the ISM points from what a VPL sees ([`ism_points`]), the interleave block from the VPL
+//! count ([`interleave_for`]), the distance clamp from the scene's size ([`dmin`]), the
+//! adapter's caps on them.
+
+use crate::config::Render;
+use crate::gpu::RendererConfig;
+use crate::scene::{Frame, Scene};
+use crate::trace::Tracer;
+use crate::vpl::sampler::SamplerParams;
+use anyhow::{bail, Result};
+use serde::Serialize;
+
+/// A render's settings resolved against its scene and adapter: nothing is left to choose.
+#[derive(Clone, Debug, Serialize)]
+pub struct Resolved {
+    /// The GPU renderer's sizes and budgets.
+    pub renderer: RendererConfig,
+    /// The sampler's parameters, the distance clamp among them.
+    pub sampler: SamplerParams,
+    /// A classical method's solver settings (None for instant radiosity).
+    pub radiosity: Option<crate::radiosity::Settings>,
+}
+
+/// Resolves `cfg` (validated) for `scene`, whose frame 0 is `frame0` traced by `tracer`, on an
+/// adapter of `limits`.
+pub fn resolve(
+    cfg: &Render,
+    scene: &Scene,
+    frame0: &Frame,
+    tracer: &Tracer,
+    limits: &wgpu::Limits,
+) -> Result<Resolved> {
+    let mut renderer = bounds(cfg, frame0.tris.len());
+    // Within the adapter's shadow layers, 5 a sample.
+    let most = (limits.max_texture_array_layers / 5).max(1);
+    renderer.light_samples = light_samples(cfg, frame0, tracer, most);
+    let em = &frame0.emitters;
+    if renderer.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
+        bail!(
+            "--light-samples {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
+            renderer.light_samples,
+            scene.name
+        );
+    }
+    renderer.points_per_vpl = ism_points(cfg, frame0, tracer);
+    renderer.num_points = ism_point_set_size(renderer.points_per_vpl, frame0.tris.len());
+    Ok(Resolved {
+        renderer,
+        sampler: sampler_params(cfg, scene),
+        radiosity: (cfg.method != crate::radiosity::Method::Instant)
+            .then(|| radiosity_settings(cfg, scene)),
+    })
+}
+
+/// The relative variance of the direct light's N-sample estimate that `--light-samples 0`
+/// aims at: a relative standard error of 5% a pixel.
+pub const DIRECT_REL_VAR: f32 = 0.05 * 0.05;
+/// The range of `--light-samples 0`'s choice.
+pub const AUTO_LIGHT_SAMPLES: (u32, u32) = (4, 64);
+
+/// Emitter samples for a scene from the relative squared error of its direct light at each
+/// sample count (`errors`: (N, error) by increasing N, from
+/// `reference::twin::direct_relative_error` over what the camera sees): the fewest that reach
+/// [`DIRECT_REL_VAR`], else the most of them; within [`AUTO_LIGHT_SAMPLES`] and never fewer
+/// than `exact` (the slots the scene's punctual lights take, plus one if it has emitter
+/// triangles).
+pub fn light_samples_for(errors: &[(u32, f32)], exact: u32) -> u32 {
+    let (lo, hi) = AUTO_LIGHT_SAMPLES;
+    let n = errors
+        .iter()
+        .find(|&&(_, e)| e <= DIRECT_REL_VAR)
+        .or(errors.last())
+        .map_or(lo, |&(n, _)| n);
+    n.clamp(lo, hi).max(exact)
+}
+
+/// `--interleave 0`'s block side for `vpls` VPLs: 8 from 4096 VPLs (each pixel still gathers
+/// 64), else 4. Measured on `cornell-orbit` at 256x256 (README, "Speed against Mitsuba 3"):
+/// frames alone, 8 against 4 raises relMSE 9% at 256 VPLs and 8% at 1024 but 2% at 4096,
+/// where it takes the gather from 320 ms to 70 ms a frame on lavapipe.
+pub fn interleave_for(vpls: u32) -> u32 {
+    if vpls >= 4096 {
+        8
+    } else {
+        4
+    }
+}
+
+/// The range of `--ism-points 0`'s choice.
+pub const AUTO_ISM_POINTS: (u32, u32) = (64, 4096);
+
+/// Points a VPL splats for tiles of `ism_size` texels whose holes `pull_levels` levels of
+/// pull-push fill, in a scene of `triangles` triangles of whose surface area a VPL sees the
+/// fraction `seen` (in front of it, unoccluded; `vpl::ism_points::seen_fraction`), the larger of:
+/// - coverage: enough that the points it sees alone fall in every texel of the tile's disk
+///   at the coarsest level, n ln n of them for its n texels (the coupon collector's
+///   expectation), so that pull-push closes the tile without the near-field points (64
+///   texels and 3 levels: 197 / `seen`);
+/// - detail: one for every [`TRIANGLES_PER_ISM_POINT`] triangles. Geometry finer than the
+///   near-field rays' cells (a column, a lamp) is in a tile only through points of the set.
+///   Measured: on the atrium (128k triangles then, 256 VPLs) relMSE against the path tracer falls
+///   from 0.093 at 823 points to 0.087 at 4096, and at 1024 VPLs from 0.053 at 1001 to 0.050;
+///   on the Cornell box (36) it stays within 1% from 64 to 4096 points, where the near-field
+///   points carry its few large surfaces.
+///
+/// Within [`AUTO_ISM_POINTS`].
+pub fn ism_points_for(ism_size: u32, pull_levels: u32, seen: f32, triangles: usize) -> u32 {
+    let levels = crate::vpl::ism_points::pull_levels_run(ism_size, pull_levels);
+    let side = (ism_size >> levels) as f32;
+    let n = (std::f32::consts::FRAC_PI_4 * side * side).max(1.0);
+    let coverage = (n * n.ln().max(1.0) / seen.max(1e-3)).ceil() as u32;
+    let detail = triangles
+        .div_ceil(TRIANGLES_PER_ISM_POINT)
+        .min(u32::MAX as usize) as u32;
+    let (lo, hi) = AUTO_ISM_POINTS;
+    coverage.max(detail).clamp(lo, hi)
+}
+
+/// `--ism-points 0`'s detail term: a point a slot for every this many triangles.
+pub const TRIANGLES_PER_ISM_POINT: usize = 32;
+
+/// Points in the ISM point set of a scene of `triangles` triangles for `points_per_vpl` points
+/// a slot: 16 slots' worth or one a triangle, whichever is more (a point set smaller than the
+/// triangle count leaves small triangles, a column's facets, with no point in any tile),
+/// between 2^16 and 2^22, and never fewer than one slot's.
+pub fn ism_point_set_size(points_per_vpl: u32, triangles: usize) -> u32 {
+    points_per_vpl
+        .saturating_mul(16)
+        .max(triangles.min(u32::MAX as usize) as u32)
+        .clamp(1 << 16, 1 << 22)
+        .max(points_per_vpl)
+}
+
+/// The GPU renderer's sizes before the scene is seen, for checking a render's settings
+/// against an adapter before anything is built (`irad compare` checks every run so): each
+/// choice left to the scene at its most demanding bound (the most ISM points, the fewest
+/// light samples). Nothing is built from it: [`resolve`] chooses.
+pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
+    let q = &cfg.quality;
+    // From the scene: [`resolve`] chooses ([`ism_points`]); the most it can choose stands in
+    // for the checks.
+    let points = match q.ism_points {
+        0 => AUTO_ISM_POINTS.1,
+        n => n,
+    };
+    RendererConfig {
+        width: cfg.sequence.size.width,
+        height: cfg.sequence.size.height,
+        max_vpls: cfg.vpls,
+        ism_size: q.ism_size,
+        points_per_vpl: points,
+        num_points: ism_point_set_size(points, triangles),
+        pull_levels: q.pull_levels,
+        ism_bias: q.ism_bias,
+        // From the scene: [`resolve`] chooses ([`light_samples`], within the adapter's
+        // limit); the fewest it can choose stand in for the checks.
+        light_samples: if q.light_samples == 0 {
+            AUTO_LIGHT_SAMPLES.0
+        } else {
+            q.light_samples
+        },
+        shadow_size: q.shadow_size,
+        interleave: match q.interleave {
+            0 => interleave_for(cfg.vpls),
+            n => n,
+        },
+        aa: q.aa,
+        edge_rays: q.edge_rays,
+        compensate: q.compensate,
+        accumulate: q.accumulate,
+        shadow_bias: 1.5,
+        exposure: cfg.exposure,
+        seed: cfg.sequence.seed,
+    }
+}
+
+/// Points a VPL splats: `--ism-points`, or (0) from the scene at frame 0 (`frame0`,
+/// traced by `tracer`) by [`ism_points_for`] from the fraction of its area a VPL sees and
+/// its triangles.
+pub fn ism_points(cfg: &Render, frame0: &Frame, tracer: &Tracer) -> u32 {
+    if cfg.quality.ism_points > 0 {
+        return cfg.quality.ism_points;
+    }
+    let seen = crate::gpu::ism::seen_fraction(frame0, tracer, cfg.sequence.seed);
+    let q = &cfg.quality;
+    ism_points_for(q.ism_size, q.pull_levels, seen, frame0.tris.len())
+}
+
+/// Emitter samples for the sequence: `--light-samples` (checked against the adapter by
+/// the renderer), or (0) from the scene at frame 0 (`frame0`, traced by `tracer`) as the
+/// camera sees it at 64 pixel centres across (in the image's aspect), by
+/// [`light_samples_for`], at most `most` (what the adapter can hold).
+pub fn light_samples(cfg: &Render, frame0: &Frame, tracer: &Tracer, most: u32) -> u32 {
+    if cfg.quality.light_samples > 0 {
+        return cfg.quality.light_samples;
+    }
+    use crate::scene::SampleKind;
+    let seed = cfg.sequence.seed ^ 0x11647;
+    // The punctual lights take their slots first (`Frame::emitter_samples`): 256 area
+    // samples after them, so that each of up to 64 strata holds 4 or more.
+    let punctual =
+        |s: &[crate::scene::EmitterSample]| s.iter().filter(|l| l.kind != SampleKind::Area).count();
+    let exact = punctual(&frame0.emitter_samples(seed, 256));
+    let samples = frame0.emitter_samples(seed, 256 + exact);
+    let area = samples.iter().any(|l| l.kind == SampleKind::Area);
+    let size = &cfg.sequence.size;
+    let rows = (64 * size.height).div_ceil(size.width.max(1)).clamp(1, 256);
+    let points = crate::reference::twin::pixel_points(frame0, tracer, 64, rows);
+    let (lo, hi) = AUTO_LIGHT_SAMPLES;
+    // N samples in all leave N - exact for the area emitters.
+    let counts: Vec<u32> = (lo..=hi).filter(|&n| !area || n as usize > exact).collect();
+    let area_counts: Vec<u32> = counts
+        .iter()
+        .map(|&n| (n as usize).saturating_sub(exact).max(1) as u32)
+        .collect();
+    let errors = crate::reference::twin::direct_relative_error(
+        frame0,
+        tracer,
+        &points,
+        &samples,
+        &area_counts,
+    );
+    let pairs: Vec<(u32, f32)> = counts.into_iter().zip(errors).collect();
+    light_samples_for(&pairs, exact as u32 + area as u32).min(most)
+}
+
+/// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
+pub fn dmin(cfg: &Render, scene: &Scene) -> f32 {
+    cfg.clamp.unwrap_or_else(|| {
+        let (lo, hi) = scene.at(0.0).bounds();
+        0.02 * (hi - lo).length()
+    })
+}
+
+/// The classical solver's settings for `scene` (element size from its size).
+pub fn radiosity_settings(cfg: &Render, scene: &Scene) -> crate::radiosity::Settings {
+    let (lo, hi) = scene.at(0.0).bounds();
+    crate::radiosity::Settings {
+        method: cfg.method,
+        // 0.15 in the Cornell box, whose bounding-box diagonal is 3.46.
+        element_size: 0.0433 * (hi - lo).length(),
+        seed: cfg.sequence.seed,
+        ..Default::default()
+    }
+}
+
+/// The sampler's parameters for `scene`.
+pub fn sampler_params(cfg: &Render, scene: &Scene) -> SamplerParams {
+    let s = &cfg.sampler;
+    SamplerParams {
+        kind: s.kind,
+        slots: cfg.vpls as usize,
+        candidates: s.candidates(cfg.vpls) as usize,
+        camera_points: s.camera_points as usize,
+        eps: s.eps,
+        mh_rate: s.mh_rate,
+        mh_follow: s.mh_follow,
+        mh_escape: s.mh_escape,
+        smc_rate: s.smc_rate,
+        smc_follow: s.smc_follow,
+        dmin: dmin(cfg, scene),
+        seed: cfg.sequence.seed,
+        width: cfg.sequence.size.width,
+        height: cfg.sequence.size.height,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn light_samples_follow_the_direct_lights_variance() {
+        // The fewest samples whose error is at most 0.0025, else the most tried.
+        let errs =
+            |relvar: f32| -> Vec<(u32, f32)> { (4..=64).map(|n| (n, relvar / n as f32)).collect() };
+        assert_eq!(light_samples_for(&errs(0.074), 1), 30);
+        assert_eq!(light_samples_for(&errs(0.024), 1), 10);
+        assert_eq!(light_samples_for(&errs(0.0), 1), 4);
+        assert_eq!(light_samples_for(&errs(50.0), 1), 64);
+        assert_eq!(light_samples_for(&[], 1), 4);
+        // Never fewer than the exact (punctual) slots.
+        assert_eq!(light_samples_for(&errs(0.0), 7), 7);
+        assert_eq!(light_samples_for(&errs(50.0), 80), 80);
+        // An explicit --light-samples is kept; 0 chooses from the scene.
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let tracer = crate::trace::Tracer::new(&f);
+        let mut r = Render::default();
+        r.quality.light_samples = 12;
+        assert_eq!(light_samples(&r, &f, &tracer, 8), 12);
+        r.quality.light_samples = 0;
+        let n = light_samples(&r, &f, &tracer, 409);
+        assert!((26..=34).contains(&n), "the Cornell box chose {n}");
+        // The adapter's limit caps the choice.
+        assert_eq!(light_samples(&r, &f, &tracer, 8), 8);
+    }
+
+    #[test]
+    fn ism_points_follow_what_a_vpl_sees() {
+        // 64 texels, 3 levels: the 8x8 coarsest level's disk, n = 16 pi = 50.3 texels, needs
+        // n ln n = 197 points seen; a VPL that sees a tenth of the scene splats 10 times that.
+        assert_eq!(ism_points_for(64, 3, 1.0, 36), 197);
+        assert_eq!(ism_points_for(64, 3, 0.1, 36), 1970);
+        // Many triangles: one point for every 32 of them, where that is more.
+        assert_eq!(ism_points_for(64, 3, 0.24, 128_060), 4002);
+        assert_eq!(ism_points_for(64, 3, 0.1, 32_000), 1970);
+        // Fewer levels: a finer coarsest level (16x16 of 64: 201 texels, 201 ln 201 = 1066.4; or
+        // 8x8 with none of 8).
+        assert_eq!(ism_points_for(64, 2, 1.0, 36), 1067);
+        assert_eq!(ism_points_for(8, 0, 1.0, 36), 197);
+        // Bounded both ways (2x2 at the coarsest level needs no more than the fewest).
+        assert_eq!(ism_points_for(8, 3, 1.0, 36), 64);
+        assert_eq!(ism_points_for(64, 3, 0.0, 36), 4096);
+        assert_eq!(ism_points_for(64, 3, 1.0, 1 << 20), 4096);
+        // What a VPL sees: inside an empty cube, the 5 faces other than its own (5/6 of the
+        // area; 4096 pairs: standard error 0.006).
+        let seen = |name: &str| {
+            let scene = crate::scene::builtin::load(name).unwrap().unwrap();
+            let f = scene.at(0.0);
+            crate::vpl::ism_points::seen_fraction(&f, &crate::trace::Tracer::new(&f), 1)
+        };
+        let furnace = seen("furnace");
+        assert!((furnace - 5.0 / 6.0).abs() < 0.025, "furnace: {furnace}");
+        // The Cornell box's two blocks, large for its room, hide much of it (measured 0.42),
+        // the atrium's columns and gallery more (0.24): a tracer that missed occluders
+        // would give them the furnace's.
+        let (cornell, atrium) = (seen("cornell"), seen("atrium"));
+        println!("seen: furnace {furnace}, cornell {cornell}, atrium {atrium}");
+        assert!(cornell < furnace - 0.25, "cornell: {cornell}");
+        assert!(atrium < cornell - 0.1, "atrium: {atrium}");
+        // An explicit --ism-points is kept; 0 chooses from the scene.
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let tracer = crate::trace::Tracer::new(&f);
+        let mut r = Render::default();
+        r.quality.ism_points = 1000;
+        assert_eq!(ism_points(&r, &f, &tracer), 1000);
+        r.quality.ism_points = 0;
+        assert_eq!(
+            ism_points(&r, &f, &tracer),
+            ism_points_for(64, 3, seen("cornell"), 36)
+        );
+    }
+
+    #[test]
+    fn the_ism_point_set_grows_with_the_triangles() {
+        // The Cornell box (36 triangles) keeps 16 slots' worth of 4096 points.
+        assert_eq!(ism_point_set_size(4096, 36), 1 << 16);
+        assert_eq!(ism_point_set_size(8192, 36), 1 << 17);
+        // The atrium: one point a triangle, more than 16 slots' worth.
+        assert_eq!(ism_point_set_size(4096, 128_060), 128_060);
+        // Bounded both ways, and never below one slot's points.
+        assert_eq!(ism_point_set_size(4096, 50_000_000), 1 << 22);
+        assert_eq!(ism_point_set_size(1, 0), 1 << 16);
+        assert_eq!(ism_point_set_size(1 << 23, 0), 1 << 23);
+    }
+
+    #[test]
+    fn interleave_zero_chooses_from_the_vpl_count() {
+        let mut r = Render::default();
+        assert_eq!(bounds(&r, 36).interleave, 4);
+        r.vpls = 4096;
+        assert_eq!(bounds(&r, 36).interleave, 8);
+        r.quality.interleave = 2;
+        assert_eq!(bounds(&r, 36).interleave, 2);
+    }
+}
