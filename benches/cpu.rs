@@ -71,17 +71,20 @@ fn bench(c: &mut Criterion) {
         kind,
         slots: 256,
         candidates: 1024,
-        camera_points: 256,
-        eps: 0.05,
-        mh_rate: 1.0,
-        mh_follow: 0.0,
-        mh_escape: 0,
-        smc_rate: 0.05,
-        smc_follow: 0.0,
         dmin: 0.07,
         seed: 1,
         width: 256,
         height: 256,
+        knobs: irad::vpl::sampler::knobs::SamplerKnobs {
+            camera_points: 256,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_follow: 0.0,
+            mh_escape: 0,
+            smc_rate: 0.05,
+            smc_follow: 0.0,
+            ..Default::default()
+        },
     };
     let mut g = c.benchmark_group("sampler_step");
     for kind in [SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh] {

@@ -11,6 +11,7 @@ use irad::image::Hdr;
 use irad::reference::twin;
 use irad::scene::{builtin, Frame};
 use irad::trace::Tracer;
+use irad::vpl::sampler::knobs::SamplerKnobs;
 use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams};
 
 fn env(name: &str, default: u32) -> u32 {
@@ -32,17 +33,20 @@ fn params(
         kind,
         slots,
         candidates: env("IRAD_PROBE_M", 4) as usize * slots,
-        camera_points: 256,
-        eps: 0.05,
-        mh_rate: rate,
-        mh_follow: 0.0,
-        mh_escape: 8,
-        smc_rate: 0.05,
-        smc_follow: 0.0,
         dmin,
         seed,
         width: size,
         height: size,
+        knobs: SamplerKnobs {
+            camera_points: 256,
+            eps: 0.05,
+            mh_rate: rate,
+            mh_follow: 0.0,
+            mh_escape: 8,
+            smc_rate: 0.05,
+            smc_follow: 0.0,
+            ..SamplerKnobs::default()
+        },
     }
 }
 

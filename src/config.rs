@@ -10,6 +10,7 @@
 
 use crate::gpu::BackendChoice;
 use crate::scene::Scene;
+pub use crate::vpl::sampler::knobs::{Knob, SamplerKnobs, KNOBS};
 use crate::vpl::sampler::SamplerKind;
 use anyhow::{bail, Result};
 use clap::Args;
@@ -331,88 +332,92 @@ impl Sequence {
     }
 }
 
-/// How the frame's VPLs are picked (stage 6).
+/// How the frame's VPLs are picked (stage 6): the sampler and its knobs (declared once each
+/// in `vpl::sampler::knobs`; their flags are built from that list).
 #[derive(Args, Clone, Debug, Serialize)]
 pub struct SamplerConfig {
     /// VPL sampler
     #[arg(long = "sampler", value_enum, default_value_t = SamplerConfig::default().kind)]
     pub kind: SamplerKind,
-    /// M: candidate VPLs a frame for cdf and mh [default: 4 x --vpls]
-    #[arg(long, allow_hyphen_values = true)]
-    pub candidates: Option<u32>,
-    /// K: camera points for importance
-    #[arg(long, default_value_t = SamplerConfig::default().camera_points, allow_hyphen_values = true)]
-    pub camera_points: u32,
-    /// Defensive floor of the importance, as a fraction of its mean
-    #[arg(long, default_value_t = SamplerConfig::default().eps, allow_hyphen_values = true)]
-    pub eps: f32,
-    /// MH: probability that a chain proposes in a frame where nothing moves (1: one step every
-    /// frame; lower keeps VPLs longer). The rate rises with how far the target moved, see
-    /// --mh-follow
-    #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
-    pub mh_rate: f32,
-    /// MH: how fast the proposal rate follows the scene: rate = min(1, mh-rate + mh-follow *
-    /// d), d the total-variation distance between the last frame's and this frame's target
-    /// (0: a fixed rate)
-    #[arg(long, default_value_t = SamplerConfig::default().mh_follow, allow_hyphen_values = true)]
-    pub mh_follow: f32,
-    /// MH: extra proposals in a frame for a chain whose VPL no camera point sees (0: none)
-    #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
-    pub mh_escape: u32,
-    /// SMC: probability that a slot takes a newborn particle in a frame (1: every frame, as
-    /// cdf; lower keeps VPLs longer). The rate rises with how far the kept weights are off, see
-    /// --smc-follow
-    #[arg(long, default_value_t = SamplerConfig::default().smc_rate, allow_hyphen_values = true)]
-    pub smc_rate: f32,
-    /// SMC: how fast the renewal rate follows the kept weights: rate = min(1, smc-rate +
-    /// smc-follow * D), D the spread of the kept particles' importance now over at birth (0: a
-    /// fixed rate)
-    #[arg(long, default_value_t = SamplerConfig::default().smc_follow, allow_hyphen_values = true)]
-    pub smc_follow: f32,
+    #[command(flatten)]
+    pub knobs: SamplerKnobs,
 }
 
 impl Default for SamplerConfig {
     fn default() -> Self {
         SamplerConfig {
             kind: SamplerKind::Uniform,
-            candidates: None,
-            camera_points: 256,
-            eps: 0.05,
-            // From the flicker-against-error sweep (README, "MH that holds still"): a twentieth
-            // of the chains propose where nothing moves, and the rate rises with the target's
-            // change so that chains follow a moving view or light.
-            mh_rate: 0.05,
-            mh_follow: 10.0,
-            mh_escape: 8,
-            smc_rate: 0.05,
-            smc_follow: 0.0,
+            // From the flicker-against-error sweep (docs/results.md): a twentieth of the
+            // chains propose where nothing moves, and the rate rises with the target's change
+            // so that chains follow a moving view or light (the knobs' defaults).
+            knobs: SamplerKnobs::default(),
         }
     }
 }
 
-impl SamplerConfig {
-    /// Checks the sampler's knobs for `vpls` slots (checked first, by the caller).
-    pub fn validate(&self, vpls: u32) -> Result<()> {
-        if let Some(m) = self.candidates {
-            check::int("--candidates", m, 1, 1 << 24)?;
-        }
-        check::int(
-            "--candidates (4 x --vpls)",
-            self.candidates(vpls),
-            1,
-            1 << 24,
-        )?;
-        check::int("--camera-points", self.camera_points, 1, 1 << 20)?;
-        check::float("--eps", self.eps, 0.0, false, 1000.0)?;
-        check::float("--mh-rate", self.mh_rate, 0.0, true, 1.0)?;
-        check::float("--mh-follow", self.mh_follow, 0.0, false, 1000.0)?;
-        check::int("--mh-escape", self.mh_escape, 0, 1000)?;
-        check::float("--smc-rate", self.smc_rate, 0.0, true, 1.0)?;
-        check::float("--smc-follow", self.smc_follow, 0.0, false, 1000.0)
+impl std::ops::Deref for SamplerConfig {
+    type Target = SamplerKnobs;
+    fn deref(&self) -> &SamplerKnobs {
+        &self.knobs
     }
-    /// M for `vpls` slots.
-    pub fn candidates(&self, vpls: u32) -> u32 {
-        self.candidates.unwrap_or(vpls.saturating_mul(4))
+}
+
+impl std::ops::DerefMut for SamplerConfig {
+    fn deref_mut(&mut self) -> &mut SamplerKnobs {
+        &mut self.knobs
+    }
+}
+
+/// The knobs' flags, one a knob of [`KNOBS`]: its name, help, default and value type.
+impl clap::Args for SamplerKnobs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        KNOBS.iter().fold(cmd, |cmd, k| {
+            // clap keeps names as &'static str: the few built here live for the process.
+            let leak = |s: String| -> &'static str { Box::leak(s.into_boxed_str()) };
+            let help: Vec<&str> = k.help.lines().map(str::trim).collect();
+            let mut a = clap::Arg::new(k.name)
+                .long(k.name)
+                .help(help.join(" "))
+                .allow_hyphen_values(true)
+                .value_name(leak(k.name.to_uppercase().replace('-', "_")));
+            a = if k.integer() {
+                a.value_parser(clap::value_parser!(u32))
+            } else {
+                a.value_parser(clap::value_parser!(f32))
+            };
+            if let Some(d) = k.default() {
+                a = a.default_value(leak(if k.integer() {
+                    (d as u32).to_string()
+                } else {
+                    (d as f32).to_string()
+                }));
+            }
+            cmd.arg(a)
+        })
+    }
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl clap::FromArgMatches for SamplerKnobs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut k = SamplerKnobs::default();
+        k.update_from_arg_matches(m)?;
+        Ok(k)
+    }
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        for k in KNOBS {
+            let v = if k.integer() {
+                m.get_one::<u32>(k.name).map(|&v| v as f64)
+            } else {
+                m.get_one::<f32>(k.name).map(|&v| v as f64)
+            };
+            if let Some(v) = v {
+                k.set(self, v);
+            }
+        }
+        Ok(())
     }
 }
 
@@ -727,88 +732,11 @@ pub struct Compare {
     pub render: CompareRender,
 }
 
-/// A sampler knob that `irad compare --sweep` can vary: the flag of the same name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Knob {
-    MhRate,
-    MhFollow,
-    MhEscape,
-    SmcRate,
-    SmcFollow,
-    Eps,
-    Candidates,
-    CameraPoints,
-}
-
-impl Knob {
-    pub const ALL: [Knob; 8] = [
-        Knob::MhRate,
-        Knob::MhFollow,
-        Knob::MhEscape,
-        Knob::SmcRate,
-        Knob::SmcFollow,
-        Knob::Eps,
-        Knob::Candidates,
-        Knob::CameraPoints,
-    ];
-
-    /// The flag's name without dashes: `mh-rate`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Knob::MhRate => "mh-rate",
-            Knob::MhFollow => "mh-follow",
-            Knob::MhEscape => "mh-escape",
-            Knob::SmcRate => "smc-rate",
-            Knob::SmcFollow => "smc-follow",
-            Knob::Eps => "eps",
-            Knob::Candidates => "candidates",
-            Knob::CameraPoints => "camera-points",
-        }
-    }
-
-    /// Whether the knob takes whole numbers.
-    pub fn integer(self) -> bool {
-        matches!(self, Knob::MhEscape | Knob::Candidates | Knob::CameraPoints)
-    }
-
-    /// Whether sampler `s` reads the knob (uniform and frozen read none of them).
-    pub fn used_by(self, s: SamplerKind) -> bool {
-        use SamplerKind::*;
-        match self {
-            Knob::MhRate | Knob::MhFollow | Knob::MhEscape => s == Mh,
-            Knob::SmcRate | Knob::SmcFollow => s == Smc,
-            Knob::Candidates => matches!(s, Cdf | Mh | Smc),
-            Knob::Eps | Knob::CameraPoints => matches!(s, Cdf | Mh | Rejection | Smc),
-        }
-    }
-
-    /// Sets the knob to `v` in `c`.
-    pub fn set(self, c: &mut SamplerConfig, v: f64) {
-        match self {
-            Knob::MhRate => c.mh_rate = v as f32,
-            Knob::MhFollow => c.mh_follow = v as f32,
-            Knob::MhEscape => c.mh_escape = v as u32,
-            Knob::SmcRate => c.smc_rate = v as f32,
-            Knob::SmcFollow => c.smc_follow = v as f32,
-            Knob::Eps => c.eps = v as f32,
-            Knob::Candidates => c.candidates = Some(v as u32),
-            Knob::CameraPoints => c.camera_points = v as u32,
-        }
-    }
-}
-
-impl std::fmt::Display for Knob {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 /// `--sweep SAMPLER:KNOB=V1,V2,...`: the runs of one sampler at each value of one knob.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sweep {
     pub sampler: SamplerKind,
-    pub knob: Knob,
+    pub knob: &'static Knob,
     pub values: Vec<f64>,
 }
 
@@ -833,16 +761,13 @@ impl std::str::FromStr for Sweep {
         let (knob, values) = rest
             .split_once('=')
             .ok_or_else(|| format!("'{s}' has no values: {form}"))?;
-        let knob = Knob::ALL
-            .into_iter()
-            .find(|k| k.name() == knob.trim().trim_start_matches("--"))
-            .ok_or_else(|| {
-                let names: Vec<&str> = Knob::ALL.iter().map(|k| k.name()).collect();
-                format!(
-                    "'{knob}' in '{s}' is not a knob that can be swept ({})",
-                    names.join(", ")
-                )
-            })?;
+        let knob = Knob::named(knob).ok_or_else(|| {
+            let names: Vec<&str> = KNOBS.iter().map(|k| k.name).collect();
+            format!(
+                "'{knob}' in '{s}' is not a knob that can be swept ({})",
+                names.join(", ")
+            )
+        })?;
         let values = values
             .split(',')
             .map(|v| {
@@ -887,27 +812,9 @@ pub struct CompareRender {
     /// Distance clamp dmin (see `irad render --help`)
     #[arg(long, allow_hyphen_values = true)]
     pub clamp: Option<f32>,
-    /// MH: probability that a chain proposes in a frame where nothing moves
-    #[arg(long, default_value_t = SamplerConfig::default().mh_rate, allow_hyphen_values = true)]
-    pub mh_rate: f32,
-    /// MH: how fast the proposal rate follows the scene (see `irad render --help`)
-    #[arg(long, default_value_t = SamplerConfig::default().mh_follow, allow_hyphen_values = true)]
-    pub mh_follow: f32,
-    /// MH: extra proposals for a chain whose VPL no camera point sees
-    #[arg(long, default_value_t = SamplerConfig::default().mh_escape, allow_hyphen_values = true)]
-    pub mh_escape: u32,
-    /// SMC: probability that a slot takes a newborn particle in a frame
-    #[arg(long, default_value_t = SamplerConfig::default().smc_rate, allow_hyphen_values = true)]
-    pub smc_rate: f32,
-    /// SMC: how fast the renewal rate follows the kept weights (see `irad render --help`)
-    #[arg(long, default_value_t = SamplerConfig::default().smc_follow, allow_hyphen_values = true)]
-    pub smc_follow: f32,
-    /// K: camera points for importance
-    #[arg(long, default_value_t = SamplerConfig::default().camera_points, allow_hyphen_values = true)]
-    pub camera_points: u32,
-    /// Defensive floor of the importance, as a fraction of its mean
-    #[arg(long, default_value_t = SamplerConfig::default().eps, allow_hyphen_values = true)]
-    pub eps: f32,
+    /// The samplers' knobs (--mh-rate, --eps, ...: see `irad render --help`)
+    #[command(flatten)]
+    pub knobs: SamplerKnobs,
     #[command(flatten)]
     pub quality: Quality,
     /// Graphics backend
@@ -923,13 +830,7 @@ impl Default for CompareRender {
         let r = Render::default();
         CompareRender {
             clamp: r.clamp,
-            mh_rate: r.sampler.mh_rate,
-            mh_follow: r.sampler.mh_follow,
-            mh_escape: r.sampler.mh_escape,
-            smc_rate: r.sampler.smc_rate,
-            smc_follow: r.sampler.smc_follow,
-            camera_points: r.sampler.camera_points,
-            eps: r.sampler.eps,
+            knobs: r.sampler.knobs,
             quality: r.quality,
             backend: r.backend,
             exposure: r.exposure,
@@ -956,10 +857,15 @@ impl Default for Compare {
 
 impl Compare {
     /// The render settings of the run of `sampler` at `vpls` with `knob` (from a sweep) set.
-    pub fn run_with(&self, sampler: SamplerKind, vpls: u32, knob: Option<(Knob, f64)>) -> Render {
+    pub fn run_with(
+        &self,
+        sampler: SamplerKind,
+        vpls: u32,
+        knob: Option<(&'static Knob, f64)>,
+    ) -> Render {
         let mut r = self.run(sampler, vpls);
         if let Some((k, v)) = knob {
-            k.set(&mut r.sampler, v);
+            k.set(&mut r.sampler.knobs, v);
         }
         r
     }
@@ -974,14 +880,7 @@ impl Compare {
             clamp: r.clamp,
             sampler: SamplerConfig {
                 kind: sampler,
-                candidates: None,
-                camera_points: r.camera_points,
-                eps: r.eps,
-                mh_rate: r.mh_rate,
-                mh_follow: r.mh_follow,
-                mh_escape: r.mh_escape,
-                smc_rate: r.smc_rate,
-                smc_follow: r.smc_follow,
+                knobs: r.knobs.clone(),
             },
             quality: r.quality.clone(),
             backend: r.backend,
@@ -1039,10 +938,10 @@ impl Compare {
                 );
             }
             if !sw.knob.used_by(sw.sampler) {
-                let used: Vec<&str> = Knob::ALL
+                let used: Vec<&str> = KNOBS
                     .iter()
                     .filter(|k| k.used_by(sw.sampler))
-                    .map(|k| k.name())
+                    .map(|k| k.name)
                     .collect();
                 bail!(
                     "--sweep {sw}: {} does not use --{} (it uses {})",

@@ -8,6 +8,7 @@ use irad::math::luminance;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
+use irad::vpl::sampler::knobs::SamplerKnobs;
 use irad::vpl::sampler::{Sampler, SamplerKind, SamplerParams, PATHS_PER_FRAME};
 
 const W: u32 = 12;
@@ -19,18 +20,27 @@ fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
         kind,
         slots: 32,
         candidates: 128,
-        camera_points: 64,
-        eps: 0.05,
-        mh_rate: 1.0,
-        mh_follow: 0.0,
-        mh_escape: 0,
-        smc_rate: 0.05,
-        smc_follow: 0.0,
         dmin: DMIN,
         seed,
         width: W,
         height: H,
+        knobs: SamplerKnobs {
+            camera_points: 64,
+            eps: 0.05,
+            mh_rate: 1.0,
+            mh_follow: 0.0,
+            mh_escape: 0,
+            smc_rate: 0.05,
+            smc_follow: 0.0,
+            ..SamplerKnobs::default()
+        },
     }
+}
+
+/// `p` with its knobs set by `f`.
+fn knobbed(mut p: SamplerParams, f: impl FnOnce(&mut SamplerKnobs)) -> SamplerParams {
+    f(&mut p.knobs);
+    p
 }
 
 /// The four image quadrants' mean indirect luminance of one estimate.
@@ -138,10 +148,14 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
     let mh = stats(&run(SamplerKind::Mh, 420, 20), 20);
     let escape = stats(
         &run_with(
-            SamplerParams {
-                mh_escape: 8,
-                ..params(SamplerKind::Mh, 12)
-            },
+            knobbed(
+                SamplerParams {
+                    ..params(SamplerKind::Mh, 12)
+                },
+                |k| {
+                    k.mh_escape = 8;
+                },
+            ),
             420,
             20,
         ),
@@ -151,10 +165,14 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
     // must average out over time too, which a pool that never renewed would not do.
     let lazy = stats(
         &run_with(
-            SamplerParams {
-                mh_rate: 0.1,
-                ..params(SamplerKind::Mh, 13)
-            },
+            knobbed(
+                SamplerParams {
+                    ..params(SamplerKind::Mh, 13)
+                },
+                |k| {
+                    k.mh_rate = 0.1;
+                },
+            ),
             2020,
             20,
         ),
@@ -163,10 +181,14 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
     // Particles that live ten frames on average, and that follow a target.
     let smc = stats(
         &run_with(
-            SamplerParams {
-                smc_rate: 0.1,
-                ..params(SamplerKind::Smc, 14)
-            },
+            knobbed(
+                SamplerParams {
+                    ..params(SamplerKind::Smc, 14)
+                },
+                |k| {
+                    k.smc_rate = 0.1;
+                },
+            ),
             2020,
             20,
         ),
@@ -210,10 +232,14 @@ fn mh_keeps_vpls_cdf_replaces_them() {
     };
     let cdf = mean_replaced(params(SamplerKind::Cdf, 3));
     let mh = mean_replaced(params(SamplerKind::Mh, 3));
-    let lazy = mean_replaced(SamplerParams {
-        mh_rate: 0.2,
-        ..params(SamplerKind::Mh, 3)
-    });
+    let lazy = mean_replaced(knobbed(
+        SamplerParams {
+            ..params(SamplerKind::Mh, 3)
+        },
+        |k| {
+            k.mh_rate = 0.2;
+        },
+    ));
     println!("replaced per frame: cdf {cdf:.4}, mh {mh:.4}, mh at rate 0.2 {lazy:.4}");
     // Measured: cdf 1.0000, mh 0.6444, mh at rate 0.2 0.1045.
     assert!(cdf > 0.95, "cdf replaced {cdf}");
@@ -231,12 +257,18 @@ fn kept_mh_weights_hold_still_and_the_rate_follows_the_scene() {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let p = |kind| SamplerParams {
-        slots: 64,
-        candidates: 256,
-        mh_rate: 0.05,
-        mh_follow: 10.0,
-        ..params(kind, 21)
+    let p = |kind| {
+        knobbed(
+            SamplerParams {
+                slots: 64,
+                candidates: 256,
+                ..params(kind, 21)
+            },
+            |k| {
+                k.mh_rate = 0.05;
+                k.mh_follow = 10.0;
+            },
+        )
     };
     // Mean |log ratio| of consecutive frames' b for cdf, and of kept VPLs' weights for mh.
     let mut cdf = Sampler::new(p(SamplerKind::Cdf));
@@ -388,11 +420,15 @@ fn smc_keeps_its_particles_bit_for_bit_where_nothing_moves() {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let p = SamplerParams {
-        smc_rate: 0.1,
-        smc_follow: 10.0,
-        ..params(SamplerKind::Smc, 31)
-    };
+    let p = knobbed(
+        SamplerParams {
+            ..params(SamplerKind::Smc, 31)
+        },
+        |k| {
+            k.smc_rate = 0.1;
+            k.smc_follow = 10.0;
+        },
+    );
     let mut smc = Sampler::new(p.clone());
     let mut last = smc.select(&frame, &tracer, 0);
     let (mut kept, mut slots, mut replaced) = (0usize, 0usize, 0.0f64);
@@ -470,10 +506,14 @@ fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
     let (mut smc, mut uniform) = (Vec::new(), Vec::new());
     let mut old = 0usize;
     for seed in 0..seeds {
-        let mut s = Sampler::new(SamplerParams {
-            smc_rate: 0.05,
-            ..params(SamplerKind::Smc, 1000 + seed)
-        });
+        let mut s = Sampler::new(knobbed(
+            SamplerParams {
+                ..params(SamplerKind::Smc, 1000 + seed)
+            },
+            |k| {
+                k.smc_rate = 0.05;
+            },
+        ));
         for f in 0..steps {
             let fr = scene.at(time(f));
             s.select(&fr, &Tracer::new(&fr), f);

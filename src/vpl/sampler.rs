@@ -33,6 +33,7 @@
 
 mod cdf;
 mod common;
+pub mod knobs;
 mod mh;
 mod rejection;
 mod smc;
@@ -73,26 +74,10 @@ pub struct SamplerParams {
     pub kind: SamplerKind,
     /// N: VPL slots.
     pub slots: usize,
-    /// M: candidate VPLs a frame (cdf, mh).
+    /// M: candidate VPLs a frame (cdf, mh, smc), from `--candidates` or the slots.
     pub candidates: usize,
-    /// K: camera points for importance.
-    pub camera_points: usize,
-    /// The defensive floor's factor.
-    pub eps: f32,
-    /// MH: probability that a chain proposes in a frame when nothing moves (1: one step a
-    /// frame).
-    pub mh_rate: f32,
-    /// MH: how much the proposal rate rises with the target's change from the last frame
-    /// (rate = min(1, mh_rate + mh_follow * d), d its total-variation distance).
-    pub mh_follow: f32,
-    /// MH: extra proposals a frame for a chain whose VPL no camera point sees.
-    pub mh_escape: u32,
-    /// SMC: probability that a slot takes a newborn particle in a frame where the kept weights
-    /// are not off.
-    pub smc_rate: f32,
-    /// SMC: how much the renewal rate rises with the spread of the kept particles' importance
-    /// ratios (rate = min(1, smc_rate + smc_follow * D)).
-    pub smc_follow: f32,
+    /// The knobs (`candidates` above is M resolved from theirs).
+    pub knobs: knobs::SamplerKnobs,
     pub dmin: f32,
     pub seed: u64,
     /// The image the camera points stratify.

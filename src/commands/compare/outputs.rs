@@ -187,7 +187,7 @@ fn notes(plan: &Plan, floor: &Floor, results: &Results) -> Vec<String> {
             floor.rel_mse
         ),
         format!("adapter: {adapter}; CPU threads: {}", rayon::current_num_threads()),
-        format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference); warped F1 reads e_(t-1) where the pixel's surface was (disoccluded pixels left out)", cfg.render.mh_rate, cfg.render.mh_escape),
+        format!("MH proposal rate {}, escape {}; flicker F1 = mean over frame pairs of mean |e_t - e_(t-1)|, e = lum(test) - lum(reference); warped F1 reads e_(t-1) where the pixel's surface was (disoccluded pixels left out)", cfg.render.knobs.mh_rate, cfg.render.knobs.mh_escape),
     ];
     if !sweeps.is_empty() {
         notes.push(format!("sweeps: {}", sweeps.join("; ")));

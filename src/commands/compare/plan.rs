@@ -23,7 +23,7 @@ pub struct Plan {
 }
 
 /// A run's label: `mh 256`, or `mh 256 mh-rate=0.1` for a run of a sweep.
-pub fn label(s: SamplerKind, vpls: u32, knob: Option<(Knob, f64)>) -> String {
+pub fn label(s: SamplerKind, vpls: u32, knob: Option<(&'static Knob, f64)>) -> String {
     match knob {
         Some((k, v)) => format!("{s} {vpls} {k}={v}"),
         None => format!("{s} {vpls}"),
@@ -37,7 +37,7 @@ pub struct RunSpec {
     pub sampler: SamplerKind,
     pub vpls: u32,
     /// The swept knob and its value (None: the shared settings).
-    pub knob: Option<(Knob, f64)>,
+    pub knob: Option<(&'static Knob, f64)>,
     /// Whether the report shows this run's animation.
     pub shown: bool,
 }
@@ -95,7 +95,7 @@ impl Plan {
         for &method in &c.methods {
             if method == Method::Instant {
                 for &sampler in &c.samplers {
-                    let mut knobs: Vec<Option<(Knob, f64)>> = c
+                    let mut knobs: Vec<Option<(&'static Knob, f64)>> = c
                         .sweep
                         .iter()
                         .filter(|sw| sw.sampler == sampler)

@@ -22,7 +22,7 @@ pub struct RunRecord {
     pub sampler: SamplerKind,
     pub vpls: u32,
     /// The swept knob of this run (None: the shared settings).
-    pub knob: Option<Knob>,
+    pub knob: Option<&'static Knob>,
     pub knob_value: Option<f64>,
     pub mean_seconds: f64,
     /// Mean fraction of slots replaced, from the second frame on (the first fills them all).

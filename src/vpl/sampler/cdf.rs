@@ -26,7 +26,14 @@ impl VplSampler for Cdf {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = &self.params;
         let t = Instant::now();
-        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
+        let points = camera_points(
+            frame,
+            tracer,
+            p.width,
+            p.height,
+            p.knobs.camera_points as usize,
+            p.seed,
+        );
         let c = Candidates::new(
             frame,
             tracer,
@@ -34,7 +41,7 @@ impl VplSampler for Cdf {
             p.seed,
             f,
             p.candidates,
-            p.eps,
+            p.knobs.eps,
             p.dmin,
         );
         if c.vpls.is_empty() {

@@ -140,18 +140,25 @@ impl VplSampler for Mh {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = self.params.clone();
         let t = Instant::now();
-        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
+        let points = camera_points(
+            frame,
+            tracer,
+            p.width,
+            p.height,
+            p.knobs.camera_points as usize,
+            p.seed,
+        );
         let t_pool = Instant::now();
         let (vpls, paths) = paths_by(
             frame,
             tracer,
             p.seed,
-            |k| pool_path(p.seed, k, f, p.mh_rate),
+            |k| pool_path(p.seed, k, f, p.knobs.mh_rate),
             p.candidates,
             false,
         );
         let paths_s = t_pool.elapsed().as_secs_f64();
-        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.eps, p.dmin);
+        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.knobs.eps, p.dmin);
         let mut paths_s = pool.paths_s;
         if pool.vpls.is_empty() {
             self.chains.clear();
@@ -162,7 +169,7 @@ impl VplSampler for Mh {
                 ..Default::default()
             };
         }
-        let rate = (p.mh_rate + p.mh_follow * self.change(&pool)).min(1.0);
+        let rate = (p.knobs.mh_rate + p.knobs.mh_follow * self.change(&pool)).min(1.0);
         self.last_pool = pool
             .vpls
             .iter()
@@ -185,12 +192,12 @@ impl VplSampler for Mh {
                     j: r.random(),
                     u: r.random(),
                     propose: r.random::<f32>() < rate || cur.is_none(),
-                    escape: (0..p.mh_escape).map(|_| r.random()).collect(),
+                    escape: (0..p.knobs.mh_escape).map(|_| r.random()).collect(),
                 })
                 .collect();
             // Fresh candidates only when some chain proposes or may escape.
             let wanted = draws.iter().zip(&current).any(|(d, c)| {
-                d.propose || (p.mh_escape > 0 && c.is_some_and(|(_, i)| i <= pool.floor))
+                d.propose || (p.knobs.mh_escape > 0 && c.is_some_and(|(_, i)| i <= pool.floor))
             });
             let t_paths = Instant::now();
             let (fresh, fresh_paths_n) = if wanted {
@@ -238,7 +245,7 @@ impl VplSampler for Mh {
             // Escape: a chain on a VPL no camera point sees (I at the floor) takes the first
             // of its escape proposals that some camera point sees.
             let hidden = |s: &Option<(Vpl, f32)>| s.is_none_or(|(_, i)| i <= pool.floor);
-            if !fresh.is_empty() && p.mh_escape > 0 {
+            if !fresh.is_empty() && p.knobs.mh_escape > 0 {
                 let escaping = state.iter().zip(&draws).filter(|(s, _)| hidden(s));
                 step.eval(
                     &mut memo,

@@ -43,7 +43,14 @@ impl VplSampler for Rejection {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = &self.params;
         let t = Instant::now();
-        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
+        let points = camera_points(
+            frame,
+            tracer,
+            p.width,
+            p.height,
+            p.knobs.camera_points as usize,
+            p.seed,
+        );
         let (pilot, _) = fresh_paths(frame, tracer, p.seed, PILOT + f, p.slots, false);
         let pi = importance_all(&pilot, &points, tracer, p.dmin);
         let target = (pi.iter().map(|&x| x as f64).sum::<f64>() / pi.len().max(1) as f64) as f32;
@@ -64,7 +71,7 @@ impl VplSampler for Rejection {
                             .into_iter()
                             .filter_map(|v| {
                                 let i = importance(&v, &points, tracer, p.dmin);
-                                let q = keep_probability(i, target, p.eps);
+                                let q = keep_probability(i, target, p.knobs.eps);
                                 let u: f32 = rng(&[p.seed, id, v.depth as u64, 0x4e7]).random();
                                 (u < q).then_some((v, q))
                             })

@@ -144,9 +144,16 @@ impl VplSampler for Smc {
         let t = Instant::now();
         let n = p.slots;
         let first = self.particles.len() != n;
-        let points = camera_points(frame, tracer, p.width, p.height, p.camera_points, p.seed);
+        let points = camera_points(
+            frame,
+            tracer,
+            p.width,
+            p.height,
+            p.knobs.camera_points as usize,
+            p.seed,
+        );
         // The kept particles' paths in this frame, with their vertices' importance.
-        let follow = p.smc_follow > 0.0;
+        let follow = p.knobs.smc_follow > 0.0;
         let retraced: Vec<(Vec<Vpl>, Vec<f32>)> = if first {
             Vec::new()
         } else {
@@ -171,11 +178,11 @@ impl VplSampler for Smc {
             let half = |h: usize| -> Vec<f64> { t.iter().skip(h).step_by(2).copied().collect() };
             let (d0, d1) = (spread(&half(0)), spread(&half(1)));
             [
-                (p.smc_rate + p.smc_follow * d1 as f32).min(1.0),
-                (p.smc_rate + p.smc_follow * d0 as f32).min(1.0),
+                (p.knobs.smc_rate + p.knobs.smc_follow * d1 as f32).min(1.0),
+                (p.knobs.smc_rate + p.knobs.smc_follow * d0 as f32).min(1.0),
             ]
         } else {
-            [p.smc_rate; 2]
+            [p.knobs.smc_rate; 2]
         };
         // Which slots renew: drawn before anything about the particles is known.
         let mut ru = rng(&[p.seed, f, 0x5c3c]);
@@ -198,7 +205,7 @@ impl VplSampler for Smc {
                 p.seed,
                 f,
                 p.candidates,
-                p.eps,
+                p.knobs.eps,
                 p.dmin,
             );
             paths_s = c.paths_s;
