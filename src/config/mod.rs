@@ -1,0 +1,355 @@
+//! Every command's settings, in the library: the sequence to render ([`Sequence`]), the
+//! sampler ([`SamplerConfig`]), the GPU's quality knobs ([`Quality`]), and one type per
+//! command ([`Render`], [`Reference`], [`Compare`], [`Bench`]). Each has `Default` (the one
+//! place a default lives: the CLI's help reads it from here) and one `validate()` that every
+//! command calls before it renders anything. A Rust program fills these and calls
+//! [`crate::render::render`] and friends; `irad`'s CLI only maps flags onto them.
+//!
+//! Every numeric value goes through [`check`]: NaN, infinity, sign and range, with a message
+//! that names the flag as the user typed it (`--exposure NaN is not a finite number`).
+
+use crate::gpu::BackendChoice;
+pub use crate::vpl::sampler::knobs::{Knob, SamplerKnobs, KNOBS};
+use crate::vpl::sampler::SamplerKind;
+use anyhow::{bail, Result};
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+
+pub use crate::check;
+
+mod compare;
+mod quality;
+mod sampler;
+mod sequence;
+
+pub use compare::*;
+pub use quality::*;
+pub use sampler::*;
+pub use sequence::*;
+
+/// Exposure of the PNG previews: a positive finite factor.
+pub fn check_exposure(exposure: f32) -> Result<()> {
+    check::float("--exposure", exposure, 0.0, true, 1e6)
+}
+
+/// `irad render`: GPU instant radiosity of a sequence.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Render {
+    #[command(flatten)]
+    pub sequence: Sequence,
+    /// Global-illumination method: instant radiosity (VPLs), or a classical radiosity solver
+    /// whose view-independent solution gives the indirect light (kept while geometry and
+    /// lights are still)
+    #[arg(long, value_enum, default_value_t = Render::default().method)]
+    pub method: crate::radiosity::Method,
+    /// VPL slots per frame
+    #[arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true)]
+    pub vpls: u32,
+    /// Distance clamp dmin of the VPL contribution, in scene units (0: off)
+    /// [default: 2% of the scene's bounding-box diagonal]
+    #[arg(long, allow_hyphen_values = true)]
+    pub clamp: Option<f32>,
+    #[command(flatten)]
+    pub sampler: SamplerConfig,
+    #[command(flatten)]
+    pub quality: Quality,
+    /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
+    #[arg(long, value_enum, default_value_t = Render::default().backend)]
+    pub backend: BackendChoice,
+    /// Output folder
+    #[arg(long, default_value_os_t = Render::default().out)]
+    pub out: PathBuf,
+    /// Exposure of the PNG previews (EXR files are linear, unscaled)
+    #[arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// Also write each frame's direct and indirect light (frame_FFFF_direct.exr/.png, _indirect)
+    #[arg(long)]
+    pub components: bool,
+    /// How the GPU passes are submitted and timed: auto (timestamp queries where they time
+    /// the passes, else serialized), timestamps, serialized (a wait after each pass), off (one
+    /// submission, no per-pass times)
+    #[arg(long, value_enum, default_value_t = Render::default().profiling)]
+    pub profiling: ProfilingChoice,
+    /// Redraw everything every frame: no reuse of shadow maps, ISM tiles and uploads (for
+    /// measuring what reuse saves; the frames are the same bits)
+    #[arg(long)]
+    pub no_reuse: bool,
+    /// Draw every triangle in every view (the G-buffer and shadow maps otherwise leave out the
+    /// mesh instances outside the view and the back faces of closed meshes seen from outside,
+    /// which changes nothing they store but which of two coplanar faces wins a depth tie; for
+    /// measuring)
+    #[arg(long)]
+    pub no_cull: bool,
+}
+
+/// `--profiling`: how a frame's GPU passes are submitted and timed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProfilingChoice {
+    Auto,
+    Timestamps,
+    Serialized,
+    Off,
+}
+
+impl ProfilingChoice {
+    /// The mode on `gpu` (auto: [`crate::gpu::Profiling::default_for`]).
+    pub fn on(self, gpu: &crate::gpu::Gpu) -> crate::gpu::Profiling {
+        use crate::gpu::Profiling;
+        match self {
+            ProfilingChoice::Auto => Profiling::default_for(gpu),
+            ProfilingChoice::Timestamps => Profiling::Timestamps,
+            ProfilingChoice::Serialized => Profiling::Serialized,
+            ProfilingChoice::Off => Profiling::Off,
+        }
+    }
+}
+
+/// The scene `irad render` and `irad compare` use when none is named.
+pub const DEFAULT_ANIMATED_SCENE: &str = "cornell-orbit";
+
+impl Default for Render {
+    fn default() -> Self {
+        Render {
+            sequence: Sequence::default(),
+            method: crate::radiosity::Method::Instant,
+            vpls: 256,
+            clamp: None,
+            sampler: SamplerConfig::default(),
+            quality: Quality::default(),
+            backend: BackendChoice::Auto,
+            out: PathBuf::from("out"),
+            exposure: 1.0,
+            components: false,
+            profiling: ProfilingChoice::Auto,
+            no_reuse: false,
+            no_cull: false,
+        }
+    }
+}
+
+impl Render {
+    /// Checks every setting that does not need the scene or the adapter.
+    pub fn validate(&self) -> Result<()> {
+        self.sequence.validate()?;
+        check::int("--vpls", self.vpls, 1, 65535)?;
+        if let Some(c) = self.clamp {
+            check::float("--clamp", c, 0.0, false, 1e9)?;
+        }
+        self.sampler.validate(self.vpls)?;
+        self.quality.validate()?;
+        check_exposure(self.exposure)
+    }
+
+    /// The scene this render names, or the default animated Cornell box.
+    pub fn scene_name(&self) -> &str {
+        self.sequence.scene_or(DEFAULT_ANIMATED_SCENE)
+    }
+}
+
+/// `irad reference`: the path-traced ground truth.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Reference {
+    #[command(flatten)]
+    pub sequence: Sequence,
+    /// Samples per pixel
+    #[arg(long, default_value_t = Reference::default().spp, allow_hyphen_values = true)]
+    pub spp: u32,
+    /// Output folder
+    #[arg(long, default_value_os_t = Reference::default().out)]
+    pub out: PathBuf,
+    /// Exposure of the PNG previews (the EXR files are linear, unscaled)
+    #[arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true)]
+    pub exposure: f32,
+}
+
+/// The scene `irad reference` and `irad bench` use when none is named.
+pub const DEFAULT_STILL_SCENE: &str = "cornell";
+/// The most samples per pixel a reference may take.
+pub const MAX_SPP: u32 = 1 << 20;
+
+impl Default for Reference {
+    fn default() -> Self {
+        Reference {
+            sequence: Sequence::default(),
+            spp: 256,
+            out: PathBuf::from("out/reference"),
+            exposure: 1.0,
+        }
+    }
+}
+
+impl Reference {
+    pub fn validate(&self) -> Result<()> {
+        self.sequence.validate()?;
+        check::int("--spp", self.spp, 1, MAX_SPP)?;
+        check_exposure(self.exposure)
+    }
+}
+
+/// One bench configuration: VPL count and image size, written `256@256x256`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BenchCase {
+    pub vpls: u32,
+    pub size: Size,
+}
+
+impl std::str::FromStr for BenchCase {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (v, size) = s
+            .split_once('@')
+            .ok_or_else(|| format!("'{s}' is not VPLS@WxH (e.g. 256@256x256)"))?;
+        Ok(BenchCase {
+            vpls: v
+                .trim()
+                .parse()
+                .map_err(|_| format!("'{v}' in '{s}' is not a VPL count"))?,
+            size: size.parse()?,
+        })
+    }
+}
+
+impl std::fmt::Display for BenchCase {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}@{}", self.vpls, self.size)
+    }
+}
+
+impl Serialize for BenchCase {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+/// `irad bench`: time per stage of whole frames for several configurations.
+#[derive(Args, Clone, Debug, Serialize)]
+pub struct Bench {
+    #[command(flatten)]
+    pub render: Render,
+    /// Configurations VPLS@WxH (each overrides --vpls and --size)
+    #[arg(long = "configs", value_delimiter = ',', default_values_t = Bench::default().cases)]
+    pub cases: Vec<BenchCase>,
+    /// Frames measured per configuration (after one warm-up frame)
+    #[arg(long, default_value_t = Bench::default().repeat, allow_hyphen_values = true)]
+    pub repeat: u32,
+}
+
+impl Default for Bench {
+    fn default() -> Self {
+        Bench {
+            render: Render::default(),
+            cases: vec![
+                BenchCase {
+                    vpls: 256,
+                    size: Size {
+                        width: 256,
+                        height: 256,
+                    },
+                },
+                BenchCase {
+                    vpls: 1024,
+                    size: Size {
+                        width: 512,
+                        height: 512,
+                    },
+                },
+            ],
+            repeat: 5,
+        }
+    }
+}
+
+impl Bench {
+    /// The render settings of one case.
+    pub fn case(&self, c: BenchCase) -> Render {
+        let mut r = self.render.clone();
+        r.vpls = c.vpls;
+        r.sequence.size = c.size;
+        r
+    }
+    pub fn validate(&self) -> Result<()> {
+        if self.cases.is_empty() {
+            bail!("--configs needs at least one VPLS@WxH");
+        }
+        check::int("--repeat", self.repeat, 1, 10_000)?;
+        for &c in &self.cases {
+            self.case(c).validate()?;
+        }
+        Ok(())
+    }
+    /// The scene benchmarked, or the still Cornell box.
+    pub fn scene_name(&self) -> &str {
+        self.render.sequence.scene_or(DEFAULT_STILL_SCENE)
+    }
+}
+
+impl std::fmt::Display for SamplerKind {
+    /// The name the CLI spells (`uniform`, `cdf`, `mh`, `frozen`, `rejection`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use clap::ValueEnum;
+        let v = self.to_possible_value().expect("no skipped variants");
+        f.write_str(v.get_name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_and_sizes_parse_as_documented() {
+        assert_eq!("0..24".parse::<Frames>().unwrap().len(), 24);
+        assert_eq!("7".parse::<Frames>().unwrap(), Frames { start: 7, end: 8 });
+        assert!("5..5".parse::<Frames>().unwrap_err().contains("empty"));
+        assert!("a..b".parse::<Frames>().is_err());
+        let last = "4294967295".parse::<Frames>().unwrap_err();
+        assert!(last.contains("past the last frame"), "{last}");
+        assert_eq!(
+            "256x128".parse::<Size>().unwrap(),
+            Size {
+                width: 256,
+                height: 128
+            }
+        );
+        assert!("0x10".parse::<Size>().unwrap_err().contains("out of range"));
+        assert!("100000x10".parse::<Size>().is_err());
+        assert!("256".parse::<Size>().is_err());
+    }
+
+    #[test]
+    fn defaults_validate() {
+        Render::default().validate().unwrap();
+        Reference::default().validate().unwrap();
+        Compare::default().validate().unwrap();
+        Bench::default().validate().unwrap();
+    }
+
+    #[test]
+    fn interleave_out_of_range_names_the_flag() {
+        for bad in [9, 64] {
+            let q = Quality {
+                interleave: bad,
+                ..Quality::default()
+            };
+            let e = q.validate().unwrap_err().to_string();
+            assert!(e.contains("--interleave") && e.contains("0 to 8"), "{e}");
+        }
+        let q = Quality {
+            interleave: 8,
+            ..Quality::default()
+        };
+        q.validate().unwrap();
+    }
+
+    #[test]
+    fn a_long_animation_is_capped_with_a_note_and_a_short_one_is_whole() {
+        let s = Sequence::default();
+        let (f, note) = s.frames_or_all(3.0);
+        assert_eq!((f.start, f.end, note), (0, 72, None));
+        let (f, note) = s.frames_or_all(3.0e7);
+        assert_eq!(f.end, DEFAULT_FRAME_CAP);
+        assert!(note.unwrap().contains("first 2400 frames"));
+    }
+}
