@@ -1,11 +1,11 @@
 //! What a run does as a whole: one device per command, output folders that never mix two
 //! runs' frames, memory that stays flat over a long render, and what a run prints.
 
+use crate::common;
 use std::path::PathBuf;
-use std::process::Command;
 
 fn irad(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irad"))
+    common::irad_command()
         .args(args)
         .env_remove("XDG_RUNTIME_DIR")
         .output()
@@ -13,9 +13,7 @@ fn irad(args: &[&str]) -> std::process::Output {
 }
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("irad-runs-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::fresh_dir(&format!("runs-{name}"))
 }
 
 /// The cheapest render settings: tiny ISMs, one emitter sample, few VPLs.
