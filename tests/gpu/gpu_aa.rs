@@ -2,34 +2,18 @@
 //! as the reference path tracer defines it (uniform sample positions inside the pixel), held
 //! to the analytic coverage of the emitter's edges and to the path tracer's mean luminance.
 
+use crate::common::{self, backends};
 use glam::{Vec2, Vec3};
 use irad::config;
 use irad::frame::Pipeline;
-use irad::gpu::{adapters, BackendChoice};
+use irad::gpu::BackendChoice;
 use irad::image::Hdr;
 use irad::math::luminance;
 use irad::radiosity::Method;
 use irad::scene::{builtin, camera::Camera, Frame};
-use std::path::PathBuf;
 
-/// The backends to test: every one of Vulkan and GL that has a usable adapter here.
-fn backends() -> Vec<BackendChoice> {
-    let found: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .filter(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .collect();
-    assert!(
-        !found.is_empty(),
-        "no usable Vulkan or GL adapter: install mesa-vulkan-drivers or libegl-mesa0"
-    );
-    found
-}
-
-fn output_dir() -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+/// Where this file's tests write images (`target/tmp/test-output/gpu_aa`).
+const TEST: &str = "gpu_aa";
 
 /// Settings for the Cornell box at `size` x `size` with `vpls` VPLs and `aa` sub-samples per
 /// pixel side (the defaults otherwise).
@@ -129,15 +113,13 @@ fn exact_emission(frame: &Frame, w: u32, h: u32) -> Vec<f32> {
     img
 }
 
-/// Writes `values` (luminance) as a grey EXR under target/tmp/test-output.
-fn write(name: &str, w: u32, h: u32, values: &[f32]) {
-    let img = Hdr {
+/// `values` (luminance) as a grey image.
+fn grey(w: u32, h: u32, values: &[f32]) -> Hdr {
+    Hdr {
         width: w,
         height: h,
         data: values.iter().map(|&v| Vec3::splat(v)).collect(),
-    };
-    img.write_exr(&output_dir().join(format!("{name}.exr")))
-        .unwrap();
+    }
 }
 
 /// The emitter's pixels, rendered with `--aa S`, are the fraction of each pixel the light
@@ -206,13 +188,12 @@ fn emitter_edges_are_the_covered_fraction_of_its_radiance() {
                     "aa 1 passes: {worst} {rel_sum}"
                 );
             } else if worst > worst_max || rel_sum.abs() > sum_max {
-                let name = format!("aa-{backend:?}-{aa}-{rays}").to_lowercase();
-                write(&format!("{name}-gpu-emission"), w, h, &emission);
-                write(&format!("{name}-exact-emission"), w, h, &exact);
+                let name = format!("aa-{backend:?}-{aa}-{rays}-emission").to_lowercase();
+                let images =
+                    common::save_images(TEST, &name, &grey(w, h, &emission), &grey(w, h, &exact));
                 panic!(
                     "{backend:?} aa {aa} edge rays {rays}: worst pixel {worst}, total {rel_sum} \
-                     (images in {})",
-                    output_dir().display()
+                     ({images})"
                 );
             }
         }
@@ -226,7 +207,7 @@ fn emitter_edges_are_the_covered_fraction_of_its_radiance() {
 #[test]
 fn cornell_mean_luminance_matches_the_path_tracer_with_the_light_in_view() {
     let size = 128;
-    let backend = backends()[0];
+    let backend = common::backend();
     let frame = builtin::load("cornell").unwrap().unwrap().at(0.0);
     let tracer = irad::trace::Tracer::new(&frame);
     let params = irad::reference::Params {
@@ -314,9 +295,9 @@ fn the_classical_display_pass_box_filters_the_light_too() {
                 );
             } else if worst > 0.29 || rel_sum.abs() > 0.0023 {
                 let name = format!("aa-display-{backend:?}-{aa}").to_lowercase();
-                write(&format!("{name}-gpu"), w, h, &got);
-                write(&format!("{name}-exact"), w, h, &exact);
-                panic!("{backend:?} display aa {aa}: worst {worst}, total {rel_sum}");
+                let images =
+                    common::save_images(TEST, &name, &grey(w, h, &got), &grey(w, h, &exact));
+                panic!("{backend:?} display aa {aa}: worst {worst}, total {rel_sum} ({images})");
             }
         }
     }

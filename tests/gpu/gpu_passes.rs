@@ -1,20 +1,15 @@
 //! How a frame is submitted: one submission a frame gives the same image as one submission
 //! per pass, and per-pass times come back in every profiling mode, on every adapter here.
 
+use crate::common::{self, backends};
 use irad::config;
 use irad::frame::{Pipeline, SamplerKind};
 use irad::gpu::renderer::PASSES;
-use irad::gpu::{adapters, profile, BackendChoice, Profiling};
+use irad::gpu::{profile, BackendChoice, Profiling};
 use irad::scene::builtin;
 
-fn backends() -> Vec<BackendChoice> {
-    let found: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .filter(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .collect();
-    assert!(!found.is_empty(), "no usable Vulkan or GL adapter");
-    found
-}
+/// Where this file's tests write images (`target/tmp/test-output/gpu_passes`).
+const TEST: &str = "gpu_passes";
 
 /// A small MH pipeline for a built-in scene, on its own device.
 fn pipeline(scene: &str, vpls: u32, backend: BackendChoice) -> Pipeline {
@@ -298,16 +293,6 @@ fn window(x: u32, y: u32, n: u32) -> Vec<(usize, f32)> {
     v
 }
 
-fn write_diff(name: &str, a: &irad::image::Hdr, b: &irad::image::Hdr) {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::create_dir_all(&dir).unwrap();
-    let diff = a.zip_map(b, |p, q| (p - q).abs());
-    a.write_exr(&dir.join("actual.exr")).unwrap();
-    b.write_exr(&dir.join("expected.exr")).unwrap();
-    diff.write_exr(&dir.join("difference.exr")).unwrap();
-    println!("wrote {}", dir.display());
-}
-
 /// 64 VPLs of set `seed` on the box's non-emitting triangles, facing the room, equal flux.
 fn random_vpls(frame: &irad::scene::Frame, seed: u64) -> Vec<irad::vpl::ShadedVpl> {
     let lit: Vec<usize> = (0..frame.tris.len())
@@ -333,7 +318,7 @@ fn random_vpls(frame: &irad::scene::Frame, seed: u64) -> Vec<irad::vpl::ShadedVp
 
 #[test]
 fn interleaved_gather_is_unbiased_on_flat_regions() {
-    let backend = backends()[0];
+    let backend = common::backend();
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
     let (frame, points) = cornell_frame();
     let cam = frame.camera.position;
@@ -392,10 +377,14 @@ fn interleaved_gather_is_unbiased_on_flat_regions() {
     }
     // Measured 2e-7 (float rounding).
     println!("mean over shifts vs the window mean of the full gather: worst rel {worst:.2e}");
+    let mut images = String::new();
     if worst > 1e-4 {
-        write_diff("interleave_shifts", &mean, &full);
+        images = common::save_images(TEST, "interleave_shifts", &mean, &full);
     }
-    assert!(worst <= 1e-4, "the filter's weights are off: {worst}");
+    assert!(
+        worst <= 1e-4,
+        "the filter's weights are off: {worst} ({images})"
+    );
 
     // 2. Over many VPL sets (each with its own random shift), the filtered image's mean equals
     // the full gather's within the standard error of their difference, up to the window's
@@ -464,7 +453,7 @@ fn other_surface(
 
 #[test]
 fn interleave_filter_does_not_bleed_across_depth_or_normal_edges() {
-    let backend = backends()[0];
+    let backend = common::backend();
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
     let (frame, points) = cornell_frame();
     let cam = frame.camera.position;
@@ -558,13 +547,15 @@ fn interleave_filter_does_not_bleed_across_depth_or_normal_edges() {
                 // q's subset holds the VPL for one shift in n^2: then q is n^2 * bright.
                 for &p in &across {
                     let v = f.data[p].y;
+                    let mut images = String::new();
                     if v > 1e-4 * bright {
                         println!("p {:?} q {:?} cam {cam}", points[p], sq);
-                        write_diff("interleave_bleed", &f, &full);
+                        images = common::save_images(TEST, "interleave_bleed", &f, &full);
                     }
                     assert!(
                         v <= 1e-4 * bright,
-                        "light bleeds from pixel {q} ({bright}) to {p} ({v}) at shift {sx},{sy}"
+                        "light bleeds from pixel {q} ({bright}) to {p} ({v}) at shift {sx},{sy} \
+                         ({images})"
                     );
                 }
             }

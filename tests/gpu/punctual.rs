@@ -2,6 +2,7 @@
 //! the loader's units and placement, the reference's next-event estimation against analytic
 //! irradiance, light paths' power, and the GPU against the reference and its CPU twin.
 
+use crate::common::{self, show_images};
 use base64::Engine;
 use glam::Vec3;
 use irad::reference;
@@ -524,24 +525,8 @@ fn room(lights: Value, nodes: Vec<Value>) -> Scene {
     s
 }
 
-fn output_dir() -> std::path::PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Writes `a`, `b` and 4 |a - b| under target/tmp/test-output.
-fn write_images(name: &str, a: &irad::image::Hdr, b: &irad::image::Hdr) {
-    let dir = output_dir();
-    a.write_png(&dir.join(format!("{name}-gpu.png")), 1.0)
-        .unwrap();
-    b.write_png(&dir.join(format!("{name}-cpu.png")), 1.0)
-        .unwrap();
-    let d = a.zip_map(b, |x, y| (x - y).abs() * 4.0);
-    d.write_png(&dir.join(format!("{name}-diff.png")), 1.0)
-        .unwrap();
-    println!("images written to {}", dir.display());
-}
+/// Where this file's tests write images (`target/tmp/test-output/punctual`).
+const TEST: &str = "punctual";
 
 /// What the GPU renders of `scene` (64 x 64, 512 VPLs, 8 light samples, clamp 0.1), with the
 /// frame, and its direct light's mean |gpu - twin| / mean against the CPU twin's exact
@@ -558,11 +543,7 @@ struct GpuRun {
 const SIZE: u32 = 64;
 
 fn gpu_run(scene: &Scene) -> GpuRun {
-    use irad::gpu::{adapters, BackendChoice};
-    let backend = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .find(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .expect("no usable Vulkan or GL adapter: install mesa-vulkan-drivers or libegl-mesa0");
+    let backend = common::backend();
     let (w, h) = (SIZE, SIZE);
     let mut cfg = irad::config::Render::default();
     cfg.sequence.size = irad::config::Size {
@@ -607,10 +588,6 @@ fn gpu_run(scene: &Scene) -> GpuRun {
     }
 }
 
-fn show_images() -> bool {
-    std::env::var_os("IRAD_TEST_IMAGES").is_some()
-}
-
 /// The GPU with punctual lights only: its direct light (two hemicubes for the point light,
 /// one front face for the spot, an orthographic map for the sun) against its CPU twin's
 /// exact visibility, and the whole frame against the reference path tracer.
@@ -643,23 +620,25 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
     let direct_bound = 0.0025;
     let (rel_mse_bound, bias_bound) = (0.134, 0.0093);
     let direct_gpu = r.out.image.direct.as_ref().unwrap();
+    let mut images = String::new();
     if show_images()
         || r.direct_diff > direct_bound
         || e.rel_mse > rel_mse_bound
         || e.rel_bias.abs() > bias_bound
     {
-        write_images("punctual-direct", direct_gpu, &r.direct_cpu);
-        write_images("punctual-frame", &r.out.image.hdr, &reference);
+        let direct = common::save_images(TEST, "direct", direct_gpu, &r.direct_cpu);
+        let frame = common::save_images(TEST, "frame", &r.out.image.hdr, &reference);
+        images = format!("; direct {direct}; frame {frame}");
     }
     assert!(
         r.direct_diff <= direct_bound,
-        "direct light differs from its twin by {}",
+        "direct light differs from its twin by {}{images}",
         r.direct_diff
     );
-    assert!(e.rel_mse <= rel_mse_bound, "relMSE {}", e.rel_mse);
+    assert!(e.rel_mse <= rel_mse_bound, "relMSE {}{images}", e.rel_mse);
     assert!(
         e.rel_bias.abs() <= bias_bound,
-        "relative bias {}",
+        "relative bias {}{images}",
         e.rel_bias
     );
 }
@@ -678,16 +657,18 @@ fn gpu_shadows_of_a_light_far_outside_the_geometry() {
     // Measured 0.00284; with two hemicubes (90-degree faces: few texels on the room, and a
     // bias that grows with them) 0.0152; with the maps cut at 14, no box casts a shadow: 0.0491.
     let bound = 0.0043;
+    let mut images = String::new();
     if show_images() || r.direct_diff > bound {
-        write_images(
-            "punctual-far",
+        images = common::save_images(
+            TEST,
+            "far",
             r.out.image.direct.as_ref().unwrap(),
             &r.direct_cpu,
         );
     }
     assert!(
         r.direct_diff <= bound,
-        "direct light differs from its twin by {}",
+        "direct light differs from its twin by {} ({images})",
         r.direct_diff
     );
 }

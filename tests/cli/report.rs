@@ -1,13 +1,12 @@
 //! `irad compare` end to end, and its report.html in a real browser (headless Chromium).
 
+use crate::common;
 use base64::Engine;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("irad-report-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::fresh_dir(&format!("report-{name}"))
 }
 
 /// The browsers tried: `$IRAD_CHROMIUM` if set, else the usual names of Chromium.
@@ -57,7 +56,7 @@ fn headless(browser: &str, profile: &Path, extra: &[&str], page: &Path) -> std::
 
 /// `irad compare cornell-box` on 4 small frames with a 4-spp reference, plus `extra`.
 fn compare(extra: &[&str], out: &Path, cache: &Path) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irad"))
+    common::irad_command()
         .args([
             "compare",
             "cornell-box",
@@ -102,7 +101,7 @@ fn compare_refuses_bad_sweeps_naming_the_flag() {
         assert!(err.contains(expect), "{args:?}: {err}");
         assert!(!cache.join("reference").exists(), "{args:?} traced a reference");
     }
-    let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+    let o = common::irad_command()
         .args(["compare", "--spp", "1", "--cache", cache.to_str().unwrap()])
         .output()
         .unwrap();

@@ -3,11 +3,15 @@
 //! COLOR_0, emissive textures (emitter power and the reference's radiance), alpha MASK
 //! cut-outs (rays and VPLs pass through), a missing image, and the GPU against its CPU twin.
 
+use crate::common;
 use base64::Engine;
 use glam::{Vec2, Vec3};
 use irad::scene::{load::load_slice, Scene};
 use irad::trace::Tracer;
 use serde_json::{json, Value};
+
+/// Where this file's tests write images (`target/tmp/test-output/textures`).
+const TEST: &str = "textures";
 
 /// sRGB code to linear, written out from IEC 61966-2-1 (not the library's function).
 fn lin(code: u8) -> f32 {
@@ -399,24 +403,18 @@ fn a_missing_image_is_a_warning_naming_it_and_the_factor_stays() {
 /// half-black emissive texture, seen from above.
 #[test]
 fn gpu_textures_agree_with_the_cpu_twin() {
-    use irad::gpu::{adapters, BackendChoice};
-    let backends: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .filter(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .collect();
-    assert!(!backends.is_empty(), "no usable Vulkan or GL adapter");
-    for backend in backends {
-        let (d, e) = gpu_against_twin(backend, &checker_lit_by_stripes(), "textures", 1e-6);
+    for backend in common::backends() {
+        let (d, e, images) = gpu_against_twin(backend, &checker_lit_by_stripes(), "textures", 1e-6);
         // Measured 1.5e-7 and 1.1e-8 on lavapipe and llvmpipe (float rounding: the GPU
         // samples the same texels by the same rule); reading the factors instead of the
         // textures is off by tens of percent.
         assert!(
             d < 1e-6,
-            "{backend:?}: direct light differs from its twin by {d}"
+            "{backend:?}: direct light differs from its twin by {d}{images}"
         );
         assert!(
             e < 1e-6,
-            "{backend:?}: emission differs from its twin by {e}"
+            "{backend:?}: emission differs from its twin by {e}{images}"
         );
     }
 }
@@ -458,13 +456,15 @@ fn checker_lit_by_stripes() -> Scene {
 }
 
 /// The GPU's direct light and emission against the CPU twin's on `scene` (64 x 64, one sample
-/// a pixel): mean |gpu - twin| / twin's mean, for each.
+/// a pixel): mean |gpu - twin| / twin's mean, for each; where either exceeds `bound`, the
+/// images written ([`common::save_images`]), named in a line for the caller's message ("" if
+/// none).
 fn gpu_against_twin(
     backend: irad::gpu::BackendChoice,
     scene: &Scene,
     name: &str,
     bound: f32,
-) -> (f32, f32) {
+) -> (f32, f32, String) {
     let (w, h) = (64, 64);
     let mut cfg = irad::config::Render::default();
     cfg.sequence.size = irad::config::Size {
@@ -526,37 +526,30 @@ fn gpu_against_twin(
         println!("red-dominant {reds}, blue-dominant {blues} pixels");
         assert!(reds > 100 && blues > 100);
     }
+    let mut images = String::new();
     if d > bound || e > bound {
-        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-        std::fs::create_dir_all(&dir).unwrap();
-        direct_gpu
-            .write_png(&dir.join(format!("{name}-direct-gpu.png")), 1.0)
-            .unwrap();
-        direct_cpu
-            .write_png(&dir.join(format!("{name}-direct-cpu.png")), 1.0)
-            .unwrap();
-        let diff = irad::image::Hdr {
+        let name = format!("{name}-{backend:?}").to_lowercase();
+        let emission_gpu = irad::image::Hdr {
             width: w,
             height: h,
-            data: direct_gpu
-                .data
-                .iter()
-                .zip(&direct_cpu.data)
-                .map(|(&a, &b)| (a - b).abs() * 4.0)
-                .collect(),
+            data: emission_gpu,
         };
-        diff.write_png(&dir.join(format!("{name}-direct-diff.png")), 1.0)
-            .unwrap();
-        println!("images written to {}", dir.display());
+        let direct = common::save_images(TEST, &format!("{name}-direct"), direct_gpu, &direct_cpu);
+        let emission = common::save_images(
+            TEST,
+            &format!("{name}-emission"),
+            &emission_gpu,
+            &emission_cpu,
+        );
+        images = format!("; direct {direct}; emission {emission}");
     }
-    (d, e)
+    (d, e, images)
 }
 
 /// Alpha MASK on the GPU: the G-buffer sees the floor through the leaf's cut half, and the
 /// shadow maps let light through it, as the CPU twin's rays do.
 #[test]
 fn gpu_alpha_mask_cut_outs_agree_with_the_cpu_twin() {
-    use irad::gpu::{adapters, BackendChoice};
     let mut scene = masked_scene();
     scene
         .set_camera(
@@ -565,17 +558,14 @@ fn gpu_alpha_mask_cut_outs_agree_with_the_cpu_twin() {
             1.0,
         )
         .unwrap();
-    for backend in [BackendChoice::Vulkan, BackendChoice::Gl] {
-        if !adapters(backend).iter().any(|(_, ok)| *ok) {
-            continue;
-        }
-        let (d, _) = gpu_against_twin(backend, &scene, "alpha-mask", 1.5e-3);
+    for backend in common::backends() {
+        let (d, _, images) = gpu_against_twin(backend, &scene, "alpha-mask", 1.5e-3);
         // Measured 9.7e-4 on both (shadow-map texels at the edge of the leaf's shadow);
         // without the cut-outs on the GPU the camera sees the leaf where the twin sees the
         // floor through it, and the floor under the hole is in shadow: 0.61.
         assert!(
             d < 1.5e-3,
-            "{backend:?}: direct light differs from its twin by {d}"
+            "{backend:?}: direct light differs from its twin by {d}{images}"
         );
     }
 }
@@ -608,11 +598,7 @@ fn texcoords_read_into_the_frame_follow_mirrored_winding() {
 /// surfaces both ways: VPLs carry the texel's albedo, the gather applies the receiver's.
 #[test]
 fn gpu_agrees_with_the_reference_on_a_textured_room() {
-    use irad::gpu::{adapters, BackendChoice};
-    let backend = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .find(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .expect("no usable Vulkan or GL adapter");
+    let backend = common::backend();
     let mut g = Gltf::default();
     let floor = g.quad(FLOOR, FLOOR_UV, None, 0);
     let wall = g.quad(
@@ -701,37 +687,18 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
     // Measured on lavapipe: relMSE 0.00211, relative bias -0.00024 (20% of the frame is
     // indirect light).
     let (rel_mse_bound, bias_bound) = (0.0032, 0.005);
+    let mut images = String::new();
     if e.rel_mse > rel_mse_bound || e.rel_bias.abs() > bias_bound {
-        let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-        std::fs::create_dir_all(&dir).unwrap();
-        out.image
-            .hdr
-            .write_png(&dir.join("textured-room-gpu.png"), 1.0)
-            .unwrap();
-        reference
-            .write_png(&dir.join("textured-room-reference.png"), 1.0)
-            .unwrap();
-        let diff = irad::image::Hdr {
-            width: w,
-            height: h,
-            data: out
-                .image
-                .hdr
-                .data
-                .iter()
-                .zip(&reference.data)
-                .map(|(&a, &b)| (a - b).abs() * 4.0)
-                .collect(),
-        };
-        diff.write_png(&dir.join("textured-room-diff.png"), 1.0)
-            .unwrap();
-        println!("images written to {}", dir.display());
+        images = format!(
+            " ({})",
+            common::save_images(TEST, "textured-room", &out.image.hdr, &reference)
+        );
     }
     assert!(share > 0.1, "the room has indirect light to test: {share}");
-    assert!(e.rel_mse <= rel_mse_bound, "relMSE {}", e.rel_mse);
+    assert!(e.rel_mse <= rel_mse_bound, "relMSE {}{images}", e.rel_mse);
     assert!(
         e.rel_bias.abs() <= bias_bound,
-        "relative bias {}",
+        "relative bias {}{images}",
         e.rel_bias
     );
 }

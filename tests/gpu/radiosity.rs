@@ -1,8 +1,9 @@
 //! Classical radiosity through the GPU display pass, held to its CPU twin on every adapter
 //! found (lavapipe through Vulkan, llvmpipe through GL).
 
+use crate::common::{self, backends};
 use irad::gpu::radiosity::RadiosityPass;
-use irad::gpu::{adapters, BackendChoice, Gpu};
+use irad::gpu::Gpu;
 use irad::metrics::frame_error;
 use irad::radiosity::{self, display, Method, Part, Settings};
 use irad::scene::builtin;
@@ -38,10 +39,7 @@ fn gpu_display_matches_the_cpu_twin() {
         },
     );
     let mut tested = 0;
-    for b in [BackendChoice::Vulkan, BackendChoice::Gl] {
-        if !adapters(b).iter().any(|(_, ok)| *ok) {
-            continue;
-        }
+    for b in backends() {
         let gpu = Gpu::new(b).unwrap();
         let mut pass = RadiosityPass::new(&gpu, w, h);
         pass.upload(&gpu, &shaded);
@@ -50,14 +48,9 @@ fn gpu_display_matches_the_cpu_twin() {
         // Measured on lavapipe and llvmpipe: relMSE 7.0e-4 (element edges falling on either
         // side of a pixel centre), relative bias -1.7e-4.
         if e.rel_mse > 1.05e-3 || e.rel_bias.abs() > 2.6e-4 {
-            let dir = std::env::temp_dir().join("irad-radiosity-test");
-            std::fs::create_dir_all(&dir).unwrap();
-            img.write_exr(&dir.join(format!("gpu-{b:?}.exr"))).unwrap();
-            img.write_png(&dir.join(format!("gpu-{b:?}.png")), 1.0)
-                .unwrap();
-            cpu.write_png(&dir.join("cpu.png"), 1.0).unwrap();
-            cpu.write_exr(&dir.join("cpu.exr")).unwrap();
-            panic!("{b:?}: {e:?} (images in {})", dir.display());
+            let name = format!("display-{b:?}").to_lowercase();
+            let images = common::save_images("radiosity", &name, &img, &cpu);
+            panic!("{b:?}: {e:?} ({images})");
         }
         tested += 1;
     }

@@ -1,19 +1,10 @@
 //! The `irad` binary end to end: outputs, conventions and clear errors.
 
+use crate::common::{self, irad};
 use std::path::PathBuf;
-use std::process::Command;
-
-fn irad(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irad"))
-        .args(args)
-        .output()
-        .unwrap()
-}
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("irad-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::fresh_dir(&format!("cli-{name}"))
 }
 
 #[test]
@@ -371,7 +362,7 @@ fn printing_into_a_closed_pipe_exits_quietly() {
         }
         let (reader, writer) = std::io::pipe().unwrap();
         drop(reader);
-        let o = Command::new(env!("CARGO_BIN_EXE_irad"))
+        let o = common::irad_command()
             .args(&args)
             .stdout(writer)
             .output()

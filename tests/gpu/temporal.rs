@@ -3,21 +3,14 @@
 //! frames; a moving light starts it anew every frame; a moving camera reprojects the history
 //! onto the same surface points.
 
+use crate::common::{self, backend, mean_lum, rel_diff};
 use irad::config;
 use irad::frame::{Pipeline, SamplerKind};
-use irad::gpu::{adapters, BackendChoice};
 use irad::image::Hdr;
-use irad::math::luminance;
 use irad::scene::builtin;
-use std::path::PathBuf;
 
-/// The first usable adapter (lavapipe, else llvmpipe).
-fn backend() -> BackendChoice {
-    [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .find(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .expect("no usable Vulkan or GL adapter: install mesa-vulkan-drivers or libegl-mesa0")
-}
+/// Where this file's tests write images (`target/tmp/test-output/temporal`).
+const TEST: &str = "temporal";
 
 /// The default renderer (2x2 sub-samples) at `size`^2 with 64 VPLs of `sampler`, averaging up
 /// to `accumulate` frames, with an `interleave`^2 interleaved gather.
@@ -53,43 +46,6 @@ fn indirect(p: &mut Pipeline, n: u32) -> Vec<(Hdr, bool)> {
         .collect()
 }
 
-fn mean_lum(a: &Hdr) -> f32 {
-    a.data.iter().map(|&c| luminance(c)).sum::<f32>() / a.data.len() as f32
-}
-
-/// Mean over pixels of |lum a - lum b|, over b's mean luminance.
-fn rel_diff(a: &Hdr, b: &Hdr) -> f32 {
-    let d: f32 = a
-        .data
-        .iter()
-        .zip(&b.data)
-        .map(|(&x, &y)| (luminance(x) - luminance(y)).abs())
-        .sum();
-    d / a.data.len() as f32 / mean_lum(b).max(1e-9)
-}
-
-fn output_dir() -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Writes `a`, `b` and |a - b| under target/tmp/test-output as `name-*.exr`.
-fn write_images(name: &str, a: &Hdr, b: &Hdr) {
-    let dir = output_dir();
-    let diff = a.zip_map(b, |x, y| (x - y).abs());
-    a.write_exr(&dir.join(format!("{name}-actual.exr")))
-        .unwrap();
-    b.write_exr(&dir.join(format!("{name}-expected.exr")))
-        .unwrap();
-    diff.write_exr(&dir.join(format!("{name}-diff.exr")))
-        .unwrap();
-    println!(
-        "wrote {name}-{{actual,expected,diff}}.exr to {}",
-        dir.display()
-    );
-}
-
 /// A still Cornell box with fresh VPLs every frame: frame k's accumulated indirect light is
 /// m_k = m_{k-1} + (x_k - m_{k-1}) / min(k + 1, N), x_k the frame's own estimate (from a
 /// pipeline without accumulation, the same VPLs), so the first N frames average exactly and
@@ -120,12 +76,13 @@ fn a_still_view_averages_the_frames_estimates() {
         // The frames' own estimates differ by far more (checked below).
         let step = rel_diff(&alone[k].0, &twin);
         println!("frame {k}: |accumulated - twin| / mean = {d:.2e}; the frame alone {step:.3}");
+        let mut images = String::new();
         if d > 1e-4 {
-            write_images("temporal-still", got, &twin);
+            images = common::save_images(TEST, &format!("still-{k}"), got, &twin);
         }
         assert!(
             d <= 1e-4,
-            "frame {k}: accumulated indirect off its twin by {d}"
+            "frame {k}: accumulated indirect off its twin by {d} ({images})"
         );
         if k > 0 {
             assert!(
@@ -185,16 +142,18 @@ fn a_moving_camera_reprojects_the_history() {
         // to 0.66 after 7 as the bilinear resampling blurs sharp features (the VPLs' spots,
         // creases) a little more each frame; the mean stays within 0.2%.
         let bound = if k == 1 { 0.2 } else { 0.8 } * unmoved;
+        let mut images = String::new();
         if d > bound || (mean - 1.0).abs() > 0.005 {
-            write_images("temporal-orbit", got, &alone[k].0);
+            images = common::save_images(TEST, &format!("orbit-{k}"), got, &alone[k].0);
         }
         assert!(
             d <= bound,
-            "frame {k}: accumulated off the frame's own by {d}, the unmoved history by {unmoved}"
+            "frame {k}: accumulated off the frame's own by {d}, the unmoved history by {unmoved} \
+             ({images})"
         );
         assert!(
             (mean - 1.0).abs() <= 0.005,
-            "frame {k}: mean luminance {mean} of the frame's own"
+            "frame {k}: mean luminance {mean} of the frame's own ({images})"
         );
     }
 }

@@ -3,7 +3,7 @@
 //! load or be refused within a time bound, without a panic, and a scene that loads must
 //! evaluate to finite triangles, a usable camera and finite emitted power.
 //!
-//! The test runs 300 cases; `IRAD_FUZZ_CASES=100000 cargo test --release --test scene_fuzz`
+//! The test runs 300 cases; `IRAD_FUZZ_CASES=100000 cargo test --release --test cpu scene_fuzz`
 //! runs more (and `IRAD_FUZZ_FIRST=N` starts at case N, to reproduce one).
 
 use base64::Engine;

@@ -1,28 +1,18 @@
 //! The GPU path held to its CPU twin and to analytic answers, on every adapter CI has
 //! (lavapipe through Vulkan and llvmpipe through GL).
 
+use crate::common::{self, backends};
 use glam::Vec3;
 use irad::config;
 use irad::frame::Pipeline;
-use irad::gpu::{adapters, BackendChoice};
+use irad::gpu::BackendChoice;
 use irad::image::Hdr;
 use irad::reference::twin;
 use irad::scene::builtin;
 use irad::trace::Tracer;
-use std::path::PathBuf;
 
-/// The backends to test: every one of Vulkan and GL that has a usable adapter here.
-fn backends() -> Vec<BackendChoice> {
-    let found: Vec<BackendChoice> = [BackendChoice::Vulkan, BackendChoice::Gl]
-        .into_iter()
-        .filter(|&b| adapters(b).iter().any(|(_, ok)| *ok))
-        .collect();
-    assert!(
-        !found.is_empty(),
-        "no usable Vulkan or GL adapter: install mesa-vulkan-drivers or libegl-mesa0"
-    );
-    found
-}
+/// Where this file's tests write images (`target/tmp/test-output/gpu`).
+const TEST: &str = "gpu";
 
 /// Render settings at `w` x `h` with `vpls` VPLs and `light_samples` emitter samples (the
 /// defaults otherwise: 64^2 ISM tiles, points a VPL from the scene (464 for the Cornell box), 3
@@ -56,41 +46,6 @@ fn pipeline(scene: &str, mut cfg: config::Render, dmin: f32, backend: BackendCho
     Pipeline::new(gpu, scene, &cfg).unwrap()
 }
 
-fn output_dir() -> PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Mean over pixels of |a - b| / (mean luminance of b), luminance; writes both images and
-/// their difference under target/tmp/test-output on failure (the caller asserts).
-fn compare(name: &str, a: &Hdr, b: &Hdr, bound: f32) -> f32 {
-    let lum = irad::math::luminance;
-    let mean_b = b.data.iter().map(|&c| lum(c)).sum::<f32>() / b.data.len() as f32;
-    let diff = a
-        .data
-        .iter()
-        .zip(&b.data)
-        .map(|(&x, &y)| (lum(x) - lum(y)).abs())
-        .sum::<f32>()
-        / a.data.len() as f32;
-    let rel = diff / mean_b.max(1e-6);
-    println!("{name}: mean |gpu - cpu| / mean = {rel:.5} (bound {bound})");
-    if rel > bound || rel.is_nan() || std::env::var_os("IRAD_TEST_IMAGES").is_some() {
-        let dir = output_dir();
-        a.write_exr(&dir.join(format!("{name}-gpu.exr"))).unwrap();
-        a.write_png(&dir.join(format!("{name}-gpu.png")), 1.0)
-            .unwrap();
-        b.write_png(&dir.join(format!("{name}-cpu.png")), 1.0)
-            .unwrap();
-        let d = a.zip_map(b, |x, y| (x - y).abs() * 4.0);
-        d.write_png(&dir.join(format!("{name}-diff.png")), 1.0)
-            .unwrap();
-        println!("images written to {}", dir.display());
-    }
-    rel
-}
-
 fn sum(images: &[&Hdr]) -> Hdr {
     Hdr {
         width: images[0].width,
@@ -116,29 +71,35 @@ fn gpu_matches_cpu_twin_direct_indirect_and_composed() {
         // Measured 0.00817 on lavapipe (Vulkan) and on llvmpipe (GL).
         let bound = 0.012;
         let direct_cpu = twin::direct(&frame, &tracer, &points, w, h, &lights);
-        let rel = compare(
+        let c = common::compare(
+            TEST,
             &format!("{name}-direct"),
             out.image.direct.as_ref().unwrap(),
             &direct_cpu,
             bound,
         );
         assert!(
-            rel <= bound,
-            "{name}: direct light differs from the CPU twin by {rel}"
+            c.rel <= bound,
+            "{name}: direct light differs from the CPU twin by {}{}",
+            c.rel,
+            c.images
         );
         // Measured 0.04204 on lavapipe and on llvmpipe.
         let bound = 0.06;
         let indirect_cpu =
             twin::gather(&frame, &tracer, &points, w, h, &out.selection.shaded, 0.07);
-        let rel = compare(
+        let c = common::compare(
+            TEST,
             &format!("{name}-indirect"),
             out.image.indirect.as_ref().unwrap(),
             &indirect_cpu,
             bound,
         );
         assert!(
-            rel <= bound,
-            "{name}: ISM gather differs from exact visibility by {rel}"
+            c.rel <= bound,
+            "{name}: ISM gather differs from exact visibility by {}{}",
+            c.rel,
+            c.images
         );
         // The composed frame against the CPU twin's emission + direct + indirect: no term of
         // the expected image comes from the GPU. Measured 0.01227 on lavapipe and on llvmpipe;
@@ -146,10 +107,18 @@ fn gpu_matches_cpu_twin_direct_indirect_and_composed() {
         let bound = 0.018;
         let emission = twin::emission(&frame, &points, w, h);
         let expected = sum(&[&emission, &direct_cpu, &indirect_cpu]);
-        let rel = compare(&format!("{name}-compose"), &out.image.hdr, &expected, bound);
+        let c = common::compare(
+            TEST,
+            &format!("{name}-compose"),
+            &out.image.hdr,
+            &expected,
+            bound,
+        );
         assert!(
-            rel <= bound,
-            "{name}: the composed frame is not emission + direct + indirect ({rel})"
+            c.rel <= bound,
+            "{name}: the composed frame is not emission + direct + indirect ({}){}",
+            c.rel,
+            c.images
         );
     }
 }
@@ -187,15 +156,18 @@ fn windowed_shadow_faces_keep_the_direct_light_of_the_twin() {
         // whole map; 0.0291 and 0.0298 with it drawn into a viewport of only as many texels
         // as a hemicube face would give it.
         let bound = 0.028;
-        let rel = compare(
+        let c = common::compare(
+            TEST,
             &format!("{name}-direct"),
             out.image.direct.as_ref().unwrap(),
             &direct_cpu,
             bound,
         );
         assert!(
-            rel <= bound,
-            "{name}: direct light differs from the twin by {rel}"
+            c.rel <= bound,
+            "{name}: direct light differs from the twin by {}{}",
+            c.rel,
+            c.images
         );
     }
 }
@@ -297,23 +269,28 @@ fn ldr_preview_is_srgb_of_the_hdr_channel_by_channel() {
         // Measured: no channel differs, on lavapipe and on llvmpipe. (A GPU whose pow is less
         // exact than Mesa's could round a channel to the next byte: that would need a bound
         // of 1, which still fails gamma 2.2 in the dark channels and swapped R/B.)
+        let mut images = String::new();
         if max > 0 {
-            let dir = output_dir();
             let name = format!("{backend:?}-aa{aa}-ldr").to_lowercase();
             let save = |bytes: Vec<u8>, what: &str| {
-                image::RgbImage::from_raw(w, h, bytes)
-                    .unwrap()
-                    .save(dir.join(format!("{name}-{what}.png")))
-                    .unwrap();
+                common::save_rgb8(TEST, &format!("{name}-{what}.png"), w, h, bytes)
+                    .display()
+                    .to_string()
             };
-            save(ldr.clone(), "gpu");
-            save(expected.clone(), "expected");
-            save(diffs.iter().map(|d| d.saturating_mul(32)).collect(), "diff");
-            println!("images written to {}", dir.display());
+            let written = [
+                save(ldr.clone(), "actual"),
+                save(expected.clone(), "expected"),
+                save(
+                    diffs.iter().map(|d| d.saturating_mul(32)).collect(),
+                    "difference",
+                ),
+            ];
+            images = format!("; images: {} (the difference x32)", written.join(", "));
+            println!("{images}");
         }
         assert!(
             max == 0,
-            "{backend:?} aa {aa}: preview byte off by {max} from sRGB"
+            "{backend:?} aa {aa}: preview byte off by {max} from sRGB{images}"
         );
     }
 }
@@ -446,7 +423,7 @@ fn skipping_back_faces_of_solids_leaves_the_frames_as_they_were() {
             };
             let (culled, whole) = (render(false), render(true));
             let name = format!("{backend:?}-cull-{view}").to_lowercase();
-            let rel = compare(&name, &culled, &whole, 1e-3);
+            let c = common::compare(TEST, &name, &culled, &whole, 1e-3);
             let differ = bits(&culled)
                 .chunks(3)
                 .zip(bits(&whole).chunks(3))
@@ -454,8 +431,10 @@ fn skipping_back_faces_of_solids_leaves_the_frames_as_they_were() {
                 .count();
             println!("{name}: {differ} of {} pixels differ", culled.data.len());
             assert!(
-                differ * 200 <= culled.data.len() && rel <= 1e-3,
-                "{name}: {differ} pixels differ, mean |culled - whole| / mean = {rel}"
+                differ * 200 <= culled.data.len() && c.rel <= 1e-3,
+                "{name}: {differ} pixels differ, mean |culled - whole| / mean = {}{}",
+                c.rel,
+                c.images
             );
         }
     }

@@ -2,6 +2,7 @@
 //! reference: the distance clamp darkens the Cornell box where its walls meet, and the
 //! compensation gives that light back.
 
+use crate::common;
 use irad::config;
 use irad::frame::Pipeline;
 use irad::image::Hdr;
@@ -26,13 +27,6 @@ fn render(dmin: f32, rays: u32) -> Hdr {
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(c.backend).unwrap());
     let mut p = Pipeline::new(gpu, scene, &c).unwrap();
     p.render_frame(0, false).unwrap().image.hdr
-}
-
-fn write(name: &str, img: &Hdr) {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("test-output");
-    std::fs::create_dir_all(&dir).unwrap();
-    img.write_png(&dir.join(format!("{name}.png")), 1.0)
-        .unwrap();
 }
 
 /// Mean luminance of `img - reference` over `mask`, relative to the reference's there.
@@ -103,13 +97,15 @@ fn compensation_gives_back_the_light_the_clamp_takes_from_corners() {
     let ok = changed > 500
         && without - unclamped < -0.03
         && (with - unclamped).abs() < 0.3 * (without - unclamped).abs();
+    let mut images = String::new();
     if !ok {
-        write("compensation-plain", &plain);
-        write("compensation-compensated", &compensated);
-        write("compensation-reference", &reference);
+        let plain = common::save_images("compensation", "plain", &plain, &reference);
+        let compensated =
+            common::save_images("compensation", "compensated", &compensated, &reference);
+        images = format!(" (plain {plain}; compensated {compensated})");
     }
     assert!(
         ok,
-        "{changed} pixels; bias {without} without, {with} with compensation, {unclamped} unclamped"
+        "{changed} pixels; bias {without} without, {with} with compensation, {unclamped} unclamped{images}"
     );
 }

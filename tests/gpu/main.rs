@@ -1,0 +1,17 @@
+//! The GPU path on every adapter found here (lavapipe through Vulkan, llvmpipe through GL),
+//! held to its CPU twin, to the reference path tracer and to analytic answers. One test
+//! binary (linking wgpu once) with a module per subject; `cargo test --release --test gpu
+//! MODULE::` runs one of them.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod compensation;
+mod gpu;
+mod gpu_aa;
+mod gpu_passes;
+mod punctual;
+mod radiosity;
+mod temporal;
+mod textures;
+mod thin_gap;
