@@ -5,8 +5,8 @@
     python3 benches/results.py --quick    # a smoke run: smaller sizes, fewer frames (2-4 min)
 
 Every figure in docs/results.md comes from this script: edit the script, not the page. The
-page is stamped with the commit (`git rev-parse HEAD`, "+ changes" if the tree differs from
-it), the machine (CPU model and cores from /proc/cpuinfo and nproc, the load average before
+page is stamped with the commit (`git rev-parse HEAD`, "+ uncommitted changes" if the code,
+shaders, scenes or benches differ from it), the machine (CPU model and cores from /proc/cpuinfo and nproc, the load average before
 and after) and the adapters (`irad info`), and says which mode wrote it.
 
 What it runs, in order (the irad binary is built first with `cargo build --release` unless
@@ -84,7 +84,9 @@ def commit():
         ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True
     ).stdout.strip()
     dirty = subprocess.run(
-        ["git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":!docs/results.md", ":!docs/results"],
+        # What makes the figures: the code, shaders, scenes and this script (not the docs).
+        ["git", "status", "--porcelain", "--untracked-files=no", "--", "src", "shaders", "scenes",
+         "assets", "Cargo.toml", "Cargo.lock", "benches"],
         cwd=ROOT,
         capture_output=True,
         text=True,
