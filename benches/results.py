@@ -21,7 +21,10 @@ What it runs, in order (the irad binary is built first with `cargo build --relea
    uniform,cdf,mh,smc,frozen`: the relMSE / flicker table and the report's charts, copied to
    docs/results/. The path-traced reference is cached in out/results/cache, so a second run
    only renders the samplers.
-5. benches/speed_vs_mitsuba.py, only if `python3 -c "import mitsuba"` works (else a line says
+5. With `--cargo` (off by default: it adds 15-30 minutes on 2 cores): the first build,
+   `cargo build --release` into an empty target folder (out/results/fresh-target, removed
+   after), then `cargo test --release` from there (building the tests, then running them).
+6. benches/speed_vs_mitsuba.py, only if `python3 -c "import mitsuba"` works (else a line says
    it was skipped and how to enable it; see benches/README.md).
 
 Scratch output goes to out/results/ (ignored by git).
@@ -179,6 +182,29 @@ def mitsuba():
     return stdout, wall
 
 
+def cargo_costs():
+    """Times a first build in an empty target folder and the test suite after it."""
+    fresh = WORK / "fresh-target"
+    shutil.rmtree(fresh, ignore_errors=True)
+    env = dict(os.environ, CARGO_TARGET_DIR=str(fresh))
+    res = {"load0": load()}
+    _, res["build"] = sh(["cargo", "build", "--release"], env=env)
+    res["load1"] = load()
+    t0 = time.monotonic()
+    p = subprocess.run(["cargo", "test", "--release"], cwd=ROOT, env=env, capture_output=True, text=True)
+    res["test"] = time.monotonic() - t0
+    res["load2"] = load()
+    res["rc"] = p.returncode
+    text = p.stdout + p.stderr
+    res["passed"] = sum(int(n) for n in re.findall(r"test result: \w+\. (\d+) passed", text))
+    res["failed"] = sum(int(n) for n in re.findall(r"test result: \w+\. \d+ passed; (\d+) failed", text))
+    res["skipped"] = [l.strip() for l in text.splitlines() if l.startswith("SKIPPED")]
+    m = re.search(r"Finished `release` profile.* in (.+)", text)
+    res["test_build"] = m.group(1) if m else None
+    shutil.rmtree(fresh, ignore_errors=True)
+    return res
+
+
 def f(x, d=5):
     return "-" if x is None else f"{x:.{d}f}"
 
@@ -192,6 +218,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="a smoke run: smaller, fewer frames")
     ap.add_argument("--irad", help="the irad binary (default: target/release/irad)")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release first")
+    ap.add_argument("--cargo", action="store_true",
+                    help="also time a first build (empty target folder) and cargo test --release")
     ap.add_argument("--out", default=str(DOCS / "results.md"), help="the page to write")
     args = ap.parse_args()
 
@@ -236,6 +264,11 @@ def main():
     if frame:
         shutil.copyfile(frame, FIGS / "frame.png")
 
+    costs = None
+    if args.cargo:
+        log("cargo build --release into an empty target folder, then cargo test --release")
+        costs = cargo_costs()
+
     log("Mitsuba 3?")
     mts = mitsuba()
 
@@ -257,6 +290,29 @@ def main():
     for b in BACKENDS:
         a, full = adapters[b]
         L.append(f"- `--backend {b}`: " + (f"`{a}`" if a else f"unavailable ({full})"))
+    L.append("")
+
+    L.append("## The first build and the test suite")
+    L.append("")
+    if costs is None:
+        L.append("Not measured in this run: `python3 benches/results.py --cargo` times `cargo build "
+                 "--release` into an empty target folder and then `cargo test --release` (15-30 "
+                 "minutes more on 2 cores).")
+    else:
+        L.append("`cargo build --release` into an empty target folder (every dependency compiled), "
+                 "then `cargo test --release` in the same folder (the tests, examples and benches "
+                 "compiled, then every test run). Both depend on what else the cores are doing: "
+                 "the load averages are the 1-minute figures at each start and end.")
+        L.append("")
+        L.append("| step | minutes | load average at start, end |")
+        L.append("| --- | --- | --- |")
+        L.append(f"| first `cargo build --release` | {costs['build'] / 60:.1f} | {costs['load0']}, {costs['load1']} |")
+        tb = f" (compiling: {costs['test_build']})" if costs["test_build"] else ""
+        L.append(f"| then `cargo test --release`{tb} | {costs['test'] / 60:.1f} | {costs['load1']}, {costs['load2']} |")
+        L.append("")
+        L.append(f"Tests: {costs['passed']} passed, {costs['failed']} failed (exit status {costs['rc']}).")
+        for sk in costs["skipped"]:
+            L.append(f"`{sk}`")
     L.append("")
 
     L.append("## The first command: `irad render`")
