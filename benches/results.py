@@ -23,7 +23,8 @@ What it runs, in order (the irad binary is built first with `cargo build --relea
    only renders the samplers.
 5. With `--cargo` (off by default: it adds 15-30 minutes on 2 cores): the first build,
    `cargo build --release` into an empty target folder (out/results/fresh-target, removed
-   after), then `cargo test --release` from there (building the tests, then running them).
+   after), then `cargo test --release --no-fail-fast` from there (building the tests, then
+   running all of them; the failures are named and the log kept in out/results/).
 6. benches/speed_vs_mitsuba.py, only if `python3 -c "import mitsuba"` works (else a line says
    it was skipped and how to enable it; see benches/README.md).
 
@@ -191,7 +192,7 @@ def cargo_costs():
     _, res["build"] = sh(["cargo", "build", "--release"], env=env)
     res["load1"] = load()
     t0 = time.monotonic()
-    p = subprocess.run(["cargo", "test", "--release"], cwd=ROOT, env=env, capture_output=True, text=True)
+    p = subprocess.run(["cargo", "test", "--release", "--no-fail-fast"], cwd=ROOT, env=env, capture_output=True, text=True)
     res["test"] = time.monotonic() - t0
     res["load2"] = load()
     res["rc"] = p.returncode
@@ -199,6 +200,9 @@ def cargo_costs():
     res["passed"] = sum(int(n) for n in re.findall(r"test result: \w+\. (\d+) passed", text))
     res["failed"] = sum(int(n) for n in re.findall(r"test result: \w+\. \d+ passed; (\d+) failed", text))
     res["skipped"] = [l.strip() for l in text.splitlines() if l.startswith("SKIPPED")]
+    res["failures"] = sorted({l.split()[1] for l in text.splitlines()
+                              if l.startswith("test ") and l.rstrip().endswith("FAILED")})
+    (WORK / "cargo-test.log").write_text(text)
     m = re.search(r"Finished `release` profile.* in (.+)", text)
     res["test_build"] = m.group(1) if m else None
     shutil.rmtree(fresh, ignore_errors=True)
@@ -300,8 +304,8 @@ def main():
                  "minutes more on 2 cores).")
     else:
         L.append("`cargo build --release` into an empty target folder (every dependency compiled), "
-                 "then `cargo test --release` in the same folder (the tests, examples and benches "
-                 "compiled, then every test run). Both depend on what else the cores are doing: "
+                 "then `cargo test --release --no-fail-fast` in the same folder (the tests, examples "
+                 "and benches compiled, then every test run, past a failing one). Both depend on what else the cores are doing: "
                  "the load averages are the 1-minute figures at each start and end.")
         L.append("")
         L.append("| step | minutes | load average at start, end |")
@@ -310,7 +314,9 @@ def main():
         tb = f" (compiling: {costs['test_build']})" if costs["test_build"] else ""
         L.append(f"| then `cargo test --release`{tb} | {costs['test'] / 60:.1f} | {costs['load1']}, {costs['load2']} |")
         L.append("")
-        L.append(f"Tests: {costs['passed']} passed, {costs['failed']} failed (exit status {costs['rc']}).")
+        L.append(f"Tests: {costs['passed']} passed, {costs['failed']} failed (exit status {costs['rc']})"
+                 + (": " + ", ".join(f"`{t}`" for t in costs["failures"]) if costs["failures"] else "")
+                 + "; the whole log is in `out/results/cargo-test.log`.")
         for sk in costs["skipped"]:
             L.append(f"`{sk}`")
     L.append("")
