@@ -296,7 +296,7 @@ mod tests {
         );
         let v = verdict(&rows[..1]).unwrap();
         assert!(
-            v.starts_with("cdf 256 has both the lowest relMSE (0.01000)"),
+            v.starts_with("cdf 256 has the lowest relMSE (0.01000), and no run within 1.1x"),
             "{v}"
         );
         assert!(!v.contains("least flicker of all"), "{v}");
