@@ -1,13 +1,20 @@
 //! Charts (plotters): SVG for the report page, PNG beside it. Text is drawn with DejaVu Sans,
-//! embedded (assets/), so PNG charts need no system fonts.
+//! embedded (assets/), so PNG charts need no system fonts. The legend is drawn under the plot,
+//! never over the data; a curves chart whose series are single points says so in its caption;
+//! a y axis described as a fraction spans 0 to 1.
 
 use anyhow::{anyhow, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::sync::Once;
 
 const W: u32 = 760;
+/// The height of the plot (caption, axes, data); the legend's rows are added below it.
 const H: u32 = 440;
+/// One legend row, in pixels, and the legend's font size.
+const LEGEND_ROW: u32 = 18;
+const LEGEND_FONT: u32 = 13;
 
 fn register_font() {
     static ONCE: Once = Once::new();
@@ -104,7 +111,7 @@ fn color(i: usize) -> RGBColor {
     P[i % P.len()]
 }
 
-/// A tick label with three significant digits.
+/// A tick label with at most three significant digits.
 fn short(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
@@ -112,7 +119,13 @@ fn short(v: f64) -> String {
     let a = v.abs();
     if (1e-3..1e4).contains(&a) {
         let digits = (2 - a.log10().floor() as i32).max(0) as usize;
-        format!("{v:.digits$}")
+        let s = format!("{v:.digits$}");
+        // 0.0180 -> 0.018, 1.00 -> 1 (a frame axis' ticks are whole numbers).
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     } else {
         format!("{v:.1e}")
     }
@@ -127,7 +140,7 @@ fn finite(s: &Series) -> impl Iterator<Item = (f64, f64)> + '_ {
 }
 
 /// Axis ranges of the series and guides, from 0 for non-negative data; `headroom` is the
-/// fraction of the y span added on top (room for the legend).
+/// fraction of the y span added on top.
 /// (`log`: the x values are log10s, so the x axis does not start at 0.)
 fn bounds(
     series: &[Series],
@@ -226,6 +239,112 @@ fn log_x(c: &Chart) -> Option<(Vec<Series>, Vec<Guide>)> {
     Some((series, guides))
 }
 
+/// How a legend entry is marked: a grey line (a guide) or a block of the series' colour.
+enum Swatch {
+    Guide,
+    Block(RGBColor),
+}
+
+/// The legend under the plot: its entries (guides first, as they are drawn), in `cols`
+/// columns of `col_w` pixels, filled row by row.
+struct Legend {
+    entries: Vec<(String, Swatch)>,
+    cols: u32,
+    col_w: u32,
+}
+
+impl Legend {
+    fn of(c: &Chart) -> Legend {
+        let mut entries: Vec<(String, Swatch)> = c
+            .guides
+            .iter()
+            .map(|g| (g.label.clone(), Swatch::Guide))
+            .collect();
+        for (i, s) in c.series.iter().enumerate() {
+            entries.push((s.label.clone(), Swatch::Block(color(i))));
+        }
+        let font = ("sans-serif", LEGEND_FONT).into_font();
+        let widest = entries
+            .iter()
+            .map(|(label, _)| {
+                font.box_size(label)
+                    .map(|b| b.0)
+                    .unwrap_or(8 * label.len() as u32)
+            })
+            .max()
+            .unwrap_or(0);
+        // A swatch, a gap, the text and room before the next column.
+        let col_w = widest + 20 + 24;
+        let cols = ((W - 24) / col_w.max(1))
+            .clamp(1, 4)
+            .min(entries.len().max(1) as u32);
+        Legend {
+            entries,
+            cols,
+            col_w,
+        }
+    }
+
+    fn height(&self) -> u32 {
+        if self.entries.is_empty() {
+            return 0;
+        }
+        let rows = (self.entries.len() as u32).div_ceil(self.cols);
+        rows * LEGEND_ROW + 12
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static,
+    {
+        let e = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing a legend: {e:?}");
+        let grey = RGBColor(110, 110, 110);
+        let style = ("sans-serif", LEGEND_FONT)
+            .into_font()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        for (i, (label, swatch)) in self.entries.iter().enumerate() {
+            let (col, row) = (i as u32 % self.cols, i as u32 / self.cols);
+            let x = 16 + (col * self.col_w) as i32;
+            let y = 6 + (row * LEGEND_ROW + LEGEND_ROW / 2) as i32;
+            match swatch {
+                Swatch::Guide => area
+                    .draw(&PathElement::new(
+                        [(x, y), (x + 14, y)],
+                        grey.stroke_width(2),
+                    ))
+                    .map_err(e)?,
+                Swatch::Block(col) => area
+                    .draw(&Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()))
+                    .map_err(e)?,
+            }
+            area.draw(&Text::new(label.clone(), (x + 20, y), style.clone()))
+                .map_err(e)?;
+        }
+        Ok(())
+    }
+}
+
+/// The caption drawn above the plot. A curves chart's parenthesis is written from its data: a
+/// chart whose every series is one point (nothing swept, one VPL count) says so rather than
+/// promise curves.
+fn caption(c: &Chart) -> String {
+    if !matches!(c.kind, Kind::Curves) {
+        return c.title.to_string();
+    }
+    let base = c.title.split(" (").next().unwrap_or(c.title);
+    if c.series.iter().all(|s| finite(s).count() <= 1) {
+        format!("{base} (one point per run)")
+    } else {
+        format!("{base} (a curve per sampler through its swept values)")
+    }
+}
+
+/// A y axis whose description says it is a fraction spans exactly 0 to 1.
+fn is_fraction(c: &Chart) -> bool {
+    c.y.starts_with("fraction")
+}
+
 /// Draws `c`; `log` says its x values are log10s (labelled as the values).
 fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, c: &Chart, log: bool) -> Result<()>
 where
@@ -233,14 +352,12 @@ where
 {
     let e = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing a chart: {e:?}");
     root.fill(&WHITE).map_err(e)?;
-    // The legend sits top right above the data: for scatter charts that corner (slow and
-    // inaccurate) rarely has a run, and it gets more headroom.
-    let headroom = if matches!(c.kind, Kind::Lines) {
-        0.25
-    } else {
-        0.6
-    };
-    let ((x0, x1), (y0, y1)) = bounds(c.series, c.guides, headroom, log);
+    let (root, legend_area) = root.split_vertically(H);
+    // The legend is under the plot, so the data need only a little room above them.
+    let ((x0, x1), (mut y0, mut y1)) = bounds(c.series, c.guides, 0.05, log);
+    if is_fraction(c) {
+        (y0, y1) = (0.0, 1.0);
+    }
     let x_label = |v: &f64| {
         if log {
             short(10f64.powf(*v))
@@ -249,7 +366,7 @@ where
         }
     };
     let mut chart = ChartBuilder::on(&root)
-        .caption(c.title, ("sans-serif", 20))
+        .caption(caption(c), ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -300,9 +417,7 @@ where
                     style,
                 ))
                 .map_err(e)?,
-        }
-        .label(g.label.clone())
-        .legend(move |(x, y)| PathElement::new([(x, y), (x + 14, y)], grey.stroke_width(2)));
+        };
     }
     for (i, s) in c.series.iter().enumerate() {
         let col = color(i);
@@ -334,18 +449,9 @@ where
                     .draw_series(LineSeries::new(finite(s), col.stroke_width(2)))
                     .map_err(e)?
             }
-        }
-        .label(s.label.clone())
-        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], col.filled()));
+        };
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 13))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(e)?;
+    Legend::of(c).draw(&legend_area)?;
     root.present().map_err(e)?;
     Ok(())
 }
@@ -366,18 +472,19 @@ pub fn render(c: &Chart) -> Result<(String, image::RgbImage)> {
         ),
         None => (c, false),
     };
+    let h = H + Legend::of(c).height();
     let mut svg = String::new();
     draw(
-        SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area(),
+        SVGBackend::with_string(&mut svg, (W, h)).into_drawing_area(),
         c,
         log,
     )?;
-    let mut buf = vec![0u8; (W * H * 3) as usize];
+    let mut buf = vec![0u8; (W * h * 3) as usize];
     draw(
-        BitMapBackend::with_buffer(&mut buf, (W, H)).into_drawing_area(),
+        BitMapBackend::with_buffer(&mut buf, (W, h)).into_drawing_area(),
         c,
         log,
     )?;
-    let png = image::RgbImage::from_raw(W, H, buf).ok_or_else(|| anyhow!("chart buffer size"))?;
+    let png = image::RgbImage::from_raw(W, h, buf).ok_or_else(|| anyhow!("chart buffer size"))?;
     Ok((svg, png))
 }

@@ -1,6 +1,7 @@
 //! The self-contained report page: charts inline as SVG, animations and error images as
-//! base64 GIFs, a summary table, and a check script that marks the page when every image has
-//! loaded (the browser test reads it).
+//! base64 GIFs, a sentence naming the steadiest run near the lowest error, a summary table, and
+//! a check script that marks the page, invisibly, when every image has loaded (the browser test
+//! reads it).
 
 use base64::Engine;
 
@@ -79,6 +80,42 @@ fn png_uri(bytes: &[u8]) -> String {
 }
 
 /// The heat maps' section.
+/// The sentence at the top of the page: of the runs whose relMSE is at most 1.1x the lowest,
+/// the one with the least warped flicker F1 (equal to the plain F1 where nothing moves), and
+/// the run with the lowest relMSE beside it. None without a run with finite figures.
+pub fn verdict(rows: &[Row]) -> Option<String> {
+    let ok: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.rel_mse.is_finite() && r.warped.is_finite())
+        .collect();
+    let best = ok.iter().min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse))?;
+    let steady = ok
+        .iter()
+        .filter(|r| r.rel_mse <= best.rel_mse * 1.1)
+        .min_by(|a, b| a.warped.total_cmp(&b.warped))?;
+    let steadiest = ok.iter().min_by(|a, b| a.warped.total_cmp(&b.warped))?;
+    let mut s = if std::ptr::eq(*steady, *best) {
+        format!(
+            "{} has the lowest relMSE ({:.5}), and no run within 1.1x of it flickers less \
+(warped flicker F1 {:.5}).",
+            best.label, best.rel_mse, best.warped
+        )
+    } else {
+        format!(
+            "Among the runs whose relMSE is within 1.1x of the lowest ({}: {:.5}, warped flicker F1 {:.5}), \
+{} flickers least: warped flicker F1 {:.5} at relMSE {:.5}.",
+            best.label, best.rel_mse, best.warped, steady.label, steady.warped, steady.rel_mse
+        )
+    };
+    if !std::ptr::eq(*steadiest, *steady) {
+        s += &format!(
+            " The least flicker of all runs is {}'s ({:.5}), at relMSE {:.5}.",
+            steadiest.label, steadiest.warped, steadiest.rel_mse
+        );
+    }
+    Some(s)
+}
+
 fn heat_section(heat: &Heat) -> String {
     let mut h = String::from("<h2>Flicker heat maps</h2>\n");
     let (first, last) = (
@@ -136,9 +173,14 @@ th{background:#eee}td:first-child{text-align:left}.charts{display:flex;flex-wrap
 .charts figure{margin:0}.clips{display:flex;flex-wrap:wrap;gap:16px}.clip{text-align:center}\
 .clip img{image-rendering:pixelated;width:256px;display:block;margin:2px}\
 .heatrow{display:flex;gap:16px;align-items:flex-start;margin:8px 0}.heatrow>div{width:140px}\
-.heat img{image-rendering:pixelated}.heat img.sheet{width:720px}.heat img.worst{width:256px}.legend{vertical-align:middle}#check{color:#777;font-size:12px}</style>\n";
+.heat img{image-rendering:pixelated}.heat img.sheet{width:720px}.heat img.worst{width:256px}.legend{vertical-align:middle}\
+.verdict{font-size:17px}#check{display:none}</style>\n";
     h += "</head><body>\n";
-    h += &format!("<h1>{}</h1>\n<ul>\n", esc(title));
+    h += &format!("<h1>{}</h1>\n", esc(title));
+    if let Some(v) = verdict(rows) {
+        h += &format!("<p class=\"verdict\">{}</p>\n", esc(&v));
+    }
+    h += "<ul>\n";
     for n in notes {
         h += &format!("<li>{}</li>\n", esc(n));
     }
@@ -172,12 +214,9 @@ th{background:#eee}td:first-child{text-align:left}.charts{display:flex;flex-wrap
 A figure near it says more about the reference than about the run (see docs/math.md).</p>\n";
     }
     h += "<h2>Charts</h2>\n<div class=\"charts\">\n";
-    for (t, svg) in charts {
-        h += &format!(
-            "<figure class=\"chart\" title=\"{}\">{}</figure>\n",
-            esc(t),
-            svg
-        );
+    // The SVG carries its own caption, written from its data (charts.rs).
+    for (_, svg) in charts {
+        h += &format!("<figure class=\"chart\">{svg}</figure>\n");
     }
     h += "</div>\n<h2>Animations</h2>\n<p>Top: the frames. Below: |lum(test) - lum(reference)|, scaled.</p>\n<div class=\"clips\">\n";
     for c in clips {
@@ -200,6 +239,7 @@ A figure near it says more about the reference than about the run (see docs/math
     if let Some(heat) = heat {
         h += &heat_section(heat);
     }
+    // The browser test reads this line (every image loaded, how many); it is not shown.
     h += "<p id=\"check\">checking images...</p>\n";
     h += "<script>window.addEventListener('load',()=>{const imgs=[...document.images];\
 const bad=imgs.filter(i=>!(i.complete&&i.naturalWidth>0));\
@@ -208,4 +248,58 @@ document.getElementById('check').textContent=(bad.length==0?'report-ok':'report-
 ' images='+imgs.length+' broken='+bad.length+' charts='+charts;});</script>\n";
     h += "</body></html>\n";
     h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(label: &str, rel_mse: f64, warped: f64) -> Row {
+        Row {
+            label: label.into(),
+            seconds: 0.1,
+            rel_mse,
+            flip: 0.1,
+            flicker: warped,
+            warped,
+            replaced: 1.0,
+            acceptance: None,
+        }
+    }
+
+    #[test]
+    fn the_verdict_names_the_steadiest_run_near_the_lowest_error() {
+        // cdf has the lowest error; smc is within 1.1x of it and flickers less; frozen
+        // flickers least of all but at twice the error.
+        let rows = [
+            row("cdf 256", 0.0100, 0.0090),
+            row("smc 256", 0.0105, 0.0030),
+            row("frozen 256", 0.0200, 0.0010),
+            row("broken", f64::NAN, 0.0),
+        ];
+        let v = verdict(&rows).unwrap();
+        assert!(
+            v.starts_with(
+                "Among the runs whose relMSE is within 1.1x of the lowest (cdf 256: 0.01000"
+            ),
+            "{v}"
+        );
+        assert!(
+            v.contains("smc 256 flickers least: warped flicker F1 0.00300 at relMSE 0.01050"),
+            "{v}"
+        );
+        assert!(
+            v.contains(
+                "The least flicker of all runs is frozen 256's (0.00100), at relMSE 0.02000."
+            ),
+            "{v}"
+        );
+        let v = verdict(&rows[..1]).unwrap();
+        assert!(
+            v.starts_with("cdf 256 has the lowest relMSE (0.01000), and no run within 1.1x"),
+            "{v}"
+        );
+        assert!(!v.contains("least flicker of all"), "{v}");
+        assert!(verdict(&[]).is_none());
+    }
 }
