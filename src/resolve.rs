@@ -79,7 +79,7 @@ pub fn light_samples_for(errors: &[(u32, f32)], exact: u32) -> u32 {
 }
 
 /// `--interleave 0`'s block side for `vpls` VPLs: 8 from 4096 VPLs (each pixel still gathers
-/// 64), else 4. Measured on `cornell-orbit` at 256x256 (README, "Speed against Mitsuba 3"):
+/// 64), else 4. Measured on `cornell-orbit` at 256x256 (`git show 38ba47d:README.md`, "Speed against Mitsuba 3"):
 /// frames alone, 8 against 4 raises relMSE 9% at 256 VPLs and 8% at 1024 but 2% at 4096,
 /// where it takes the gather from 320 ms to 70 ms a frame on lavapipe.
 pub fn interleave_for(vpls: u32) -> u32 {

@@ -112,6 +112,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
             fr.mean_rgb[2]
         )?;
     }
-    crate::outln!("wrote {} frames to {}", record.frames.len(), out.display())?;
+    let n = crate::report::count(record.frames.len() as u64, "frame", "frames");
+    crate::outln!("wrote {n} to {}", out.display())?;
     Ok(images)
 }

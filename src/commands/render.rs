@@ -192,8 +192,8 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
         m => format!("method {}", m.name()),
     };
     crate::outln!(
-        "{} frames of {spec} at {}, {method}",
-        frames.len(),
+        "{} of {spec} at {}, {method}",
+        report::count(frames.len(), "frame", "frames"),
         cfg.sequence.size
     )?;
     means.print()?;

@@ -72,17 +72,17 @@ impl Default for Quality {
             shadow_size: 256,
             // From the VPL count (`interleave_for`): 4, or 8 from 4096 VPLs.
             interleave: 0,
-            // 2x2 sub-samples: measured on the Cornell box at 128x128 (README, "Pixels"),
+            // 2x2 sub-samples: measured on the Cornell box at 128x128 (docs/antialiasing.md),
             // the mean luminance goes from +6.9% of the reference's to +0.9% for +20% of the
             // frame's time; 3x3 and 4x4 cost 2.2x and 3.1x.
             aa: 2,
             // Off: the correction replaces only the emission of an edge pixel and leaves the
             // rest of its light as the sub-samples give it, so a dark emitter in front of a
-            // bright surface comes out too dark (tests/textures.rs's room: -1.2% with 16, from
+            // bright surface comes out too dark (tests/gpu/textures.rs's room: -1.2% with 16, from
             // -0.02%). `--edge-rays 16` on `cornell-orbit` at 96x96 takes the warped flicker of
-            // the pixels next to the light from 0.00165 to 0.00062 for 6.5 ms a frame (README).
+            // the pixels next to the light from 0.00165 to 0.00062 for 6.5 ms a frame (measured at 38ba47d: `git show 38ba47d:README.md`, "Pixels").
             edge_rays: 0,
-            // Off: it costs CPU time in proportion to the pixels near creases (README,
+            // Off: it costs CPU time in proportion to the pixels near creases (`git show 38ba47d:README.md`,
             // "Clamping-bias compensation").
             compensate: 0,
             accumulate: 0,

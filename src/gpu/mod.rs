@@ -176,6 +176,12 @@ impl Gpu {
     /// Opens the preferred usable adapter for `choice`. A process opens one and shares it
     /// (`Arc<Gpu>`) with every pipeline.
     pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        // The library's own unit tests have no `main` to quiet Mesa first.
+        #[cfg(test)]
+        {
+            static QUIET: std::sync::Once = std::sync::Once::new();
+            QUIET.call_once(quiet_mesa_runtime_dir);
+        }
         DEVICES_OPENED.with(|c| c.set(c.get() + 1));
         let inst = instance(choice.backends());
         let mut list = pollster::block_on(inst.enumerate_adapters(choice.backends()));

@@ -97,7 +97,7 @@ pub fn frustum_meets_box(eye: Vec3, (r, u, f): (Vec3, Vec3, Vec3), (lo, hi): (Ve
 /// gets at least a hemicube face's resolution, more where the geometry fills less of the
 /// sample's view. (A viewport of only as many texels as a hemicube face would give the window
 /// cost the same within the noise on lavapipe, in paired runs on the atrium, and left the
-/// direct light 25% further from the twin's; `tests/gpu.rs`.) The face's axes are sheared
+/// direct light 25% further from the twin's; `tests/gpu/gpu.rs`.) The face's axes are sheared
 /// and scaled so that the raster's x = `((q.t) / (q.n) - centre.x) * scale.x`, as
 /// `shaders/direct.wgsl` reads it.
 #[derive(Clone, Copy, Debug, PartialEq)]

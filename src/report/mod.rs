@@ -32,6 +32,12 @@ pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
 
 /// Makes sure `dir` exists and is writable, before any rendering starts.
 pub fn prepare_out_dir(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "{}: is a file, not a folder (the output goes into a folder of frames; name a folder)",
+            dir.display()
+        );
+    }
     std::fs::create_dir_all(dir)
         .with_context(|| format!("{}: cannot create the output folder", dir.display()))?;
     let probe = dir.join(format!(".irad-write-test-{}", std::process::id()));
@@ -39,6 +45,12 @@ pub fn prepare_out_dir(dir: &Path) -> Result<()> {
         .with_context(|| format!("{}: the output folder is not writable", dir.display()))?;
     let _ = std::fs::remove_file(probe);
     Ok(())
+}
+
+/// `n` followed by `one` or `many`: "1 frame", "2 frames".
+pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
+    let n = n.into();
+    format!("{n} {}", if n == 1 { one } else { many })
 }
 
 /// A progress bar on stderr (hidden when stderr is not a terminal).

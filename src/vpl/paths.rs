@@ -21,7 +21,7 @@ use std::f32::consts::PI;
 /// Paths stop after this many bounces whatever Russian roulette says: far more than a light
 /// path needs in an open room, because light caught between two close white surfaces (a lamp
 /// just under the ceiling) takes about a hundred bounces to get out, and cutting it off darkens
-/// the room (0.58 of the reference in tests/thin_gap.rs at 16).
+/// the room (0.58 of the reference in tests/gpu/thin_gap.rs at 16).
 pub const MAX_DEPTH: u32 = 1024;
 
 /// A virtual point light: a light-path vertex on a diffuse surface.

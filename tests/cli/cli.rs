@@ -467,3 +467,72 @@ fn a_render_with_camera_sees_what_the_camera_points_at() {
         std::fs::remove_dir_all(d).unwrap();
     }
 }
+
+/// A newcomer's slips: `--out` naming a file, a misspelled built-in, and one frame counted
+/// as one (each message checked; none renders anything).
+#[test]
+fn a_newcomers_slips_get_plain_answers() {
+    let dir = tmp("slips");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("notes.txt");
+    std::fs::write(&file, b"mine").unwrap();
+    let o = irad(&[
+        "render",
+        "--size",
+        "8x8",
+        "--frames",
+        "0",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("is a file, not a folder"),
+        "{err}"
+    );
+    assert!(!err.contains("os error 17"), "{err}");
+    assert_eq!(
+        std::fs::read(&file).unwrap(),
+        b"mine",
+        "the user's file changed"
+    );
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let o = irad(&[
+        "render",
+        "cornel-orbit",
+        "--size",
+        "8x8",
+        "--frames",
+        "0",
+        "--out",
+        out,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("did you mean 'cornell-orbit'?"), "{err}");
+    // Far from every built-in: no guess.
+    let o = irad(&[
+        "render", "kitchen", "--size", "8x8", "--frames", "0", "--out", out,
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("not a built-in scene") && !err.contains("did you mean"),
+        "{err}"
+    );
+    let one = dir.join("one");
+    let o = irad(&[
+        "reference",
+        "cornell",
+        "--size",
+        "8x8",
+        "--spp",
+        "2",
+        "--out",
+        one.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && text.contains("wrote 1 frame to"),
+        "{text}"
+    );
+}

@@ -500,7 +500,7 @@ fn double_sided_emitters_emit_from_both_sides() {
 #[test]
 fn ignored_vertex_data_warns_once_saying_what_it_changes() {
     let (mut g, mut doc) = lit();
-    // COLOR_0 is used (tests/textures.rs); a second colour set is not.
+    // COLOR_0 is used (tests/gpu/textures.rs); a second colour set is not.
     let c = g.floats(&[1.0; 16], "VEC4", 4);
     for m in [0, 1] {
         doc["meshes"][m]["primitives"][0]["attributes"]["COLOR_0"] = json!(c);
@@ -642,7 +642,7 @@ fn inspection_reports_what_the_file_holds() {
 #[test]
 fn punctual_lights_light_a_scene_without_emitters() {
     // Issue 11 item 1: KHR_lights_punctual lights are used (no warning) and light a file
-    // that has no emissive material (tests/punctual.rs holds their light to analytic values).
+    // that has no emissive material (tests/gpu/punctual.rs holds their light to analytic values).
     let lights = json!({ "lights": [
         { "type": "point", "intensity": 10.0 },
         { "type": "point", "intensity": 5.0 },

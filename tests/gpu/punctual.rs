@@ -615,7 +615,7 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
     // Measured on lavapipe: direct 0.00168; relMSE 0.0893 (mostly the geometric edges: the
     // GPU shades pixel centres, the reference averages over each pixel) and relative bias
     // -0.00068 (the VPLs' distance clamp loses little light here); -0.0062 since each VPL's
-    // ray-cast near-field points cover whole cells of its ISM (tests/thin_gap.rs): a cell at an
+    // ray-cast near-field points cover whole cells of its ISM (tests/gpu/thin_gap.rs): a cell at an
     // occluder's silhouette shadows up to half a cell past it.
     let direct_bound = 0.0025;
     let (rel_mse_bound, bias_bound) = (0.134, 0.0093);

@@ -71,8 +71,15 @@ pub fn load_any(spec: &str) -> anyhow::Result<Scene> {
     }
     let path = std::path::Path::new(spec);
     if !path.exists() {
+        // A name a letter or two from a built-in's is most likely that one, misspelled.
+        let near = BUILTINS
+            .iter()
+            .map(|b| (edit_distance(spec, b.name), b.name))
+            .filter(|&(d, _)| d <= 2)
+            .min();
+        let hint = near.map_or(String::new(), |(_, n)| format!("did you mean '{n}'? "));
         anyhow::bail!(
-            "{spec}: no such file, and not a built-in scene (built-ins: {})",
+            "{spec}: no such file, and not a built-in scene ({hint}built-ins: {})",
             BUILTINS
                 .iter()
                 .map(|b| b.name)
@@ -81,6 +88,22 @@ pub fn load_any(spec: &str) -> anyhow::Result<Scene> {
         );
     }
     Ok(load::load_path(path)?)
+}
+
+/// Levenshtein distance between two names (characters inserted, deleted or replaced).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + (ca != cb) as usize).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
 }
 
 /// Generates the glTF text of a built-in scene.

@@ -137,7 +137,7 @@ macro_rules! knobs {
             }
         }
 
-        /// Every knob, in the order the help lists them.
+        /// Every knob, in the order the help and the messages list them.
         pub static KNOBS: &[Knob] = &[$(Knob {
             name: $flag,
             help: concat!($($doc, "\n"),+),
@@ -152,12 +152,6 @@ macro_rules! knobs {
 use Range::{Float, Int};
 
 knobs! {
-    /// M: candidate VPLs a frame for cdf, mh and smc [default: 4 x --vpls]
-    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: 1 << 24 }, [Cdf, Mh, Smc];
-    /// K: camera points for importance
-    camera_points: u32 = 256, "camera-points", Int { lo: 1, hi: 1 << 20 }, [Cdf, Mh, Rejection, Smc];
-    /// Defensive floor of the importance, as a fraction of its mean
-    eps: f32 = 0.05, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc];
     /// MH: probability that a chain proposes in a frame where nothing moves (1: one step
     /// every frame; lower keeps VPLs longer). The rate rises with how far the target moved,
     /// see --mh-follow
@@ -176,6 +170,12 @@ knobs! {
     /// smc-follow * D), D the spread of the kept particles' importance now over at birth (0:
     /// a fixed rate)
     smc_follow: f32 = 0.0, "smc-follow", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Smc];
+    /// Defensive floor of the importance, as a fraction of its mean
+    eps: f32 = 0.05, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc];
+    /// M: candidate VPLs a frame for cdf, mh and smc [default: 4 x --vpls]
+    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: 1 << 24 }, [Cdf, Mh, Smc];
+    /// K: camera points for importance
+    camera_points: u32 = 256, "camera-points", Int { lo: 1, hi: 1 << 20 }, [Cdf, Mh, Rejection, Smc];
 }
 
 impl SamplerKnobs {
