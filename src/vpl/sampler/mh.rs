@@ -54,6 +54,16 @@ pub struct Mh {
 
 /// One chain's random numbers for a frame, drawn before any importance is known so that the
 /// stream does not depend on outcomes.
+/// What a step of the chains gives: their VPLs and importance, the acceptance rate, the fresh
+/// paths traced and the seconds they took.
+struct Stepped {
+    chosen: Vec<Vpl>,
+    imp: Vec<f32>,
+    acceptance: f32,
+    fresh_paths: u64,
+    paths_s: f64,
+}
+
 struct Draws {
     propose: bool,
     /// The proposal, as a fraction of the fresh candidates.
@@ -134,6 +144,113 @@ impl Mh {
         d += (sb - matched).max(0.0) / sb;
         (0.5 * d).min(1.0) as f32
     }
+
+    /// One step of every chain: re-evaluated current states, proposals from fresh candidates
+    /// accepted by the MH rule, and escapes of chains on hidden VPLs.
+    #[allow(clippy::too_many_arguments)]
+    fn step(
+        &self,
+        frame: &Frame,
+        tracer: &Tracer,
+        points: &[CameraPoint],
+        pool: &Candidates,
+        p: &SamplerParams,
+        (f, rate): (u64, f32),
+        r: &mut rand_pcg::Pcg32,
+    ) -> Stepped {
+        let n = p.slots;
+        let current = self.current(frame, tracer, points, pool.floor);
+        let draws: Vec<Draws> = current
+            .iter()
+            .map(|cur| Draws {
+                j: r.random(),
+                u: r.random(),
+                propose: r.random::<f32>() < rate || cur.is_none(),
+                escape: (0..p.knobs.mh_escape).map(|_| r.random()).collect(),
+            })
+            .collect();
+        // Fresh candidates only when some chain proposes or may escape.
+        let wanted = draws.iter().zip(&current).any(|(d, c)| {
+            d.propose || (p.knobs.mh_escape > 0 && c.is_some_and(|(_, i)| i <= pool.floor))
+        });
+        let t_paths = Instant::now();
+        let (fresh, fresh_paths_n) = if wanted {
+            fresh_paths(frame, tracer, p.seed, f, p.candidates, false)
+        } else {
+            (Vec::new(), 0)
+        };
+        let paths_s = t_paths.elapsed().as_secs_f64();
+        let pick = |x: f64| ((x * fresh.len() as f64) as usize).min(fresh.len() - 1);
+        let mut memo = vec![None; fresh.len()];
+        let step = Step {
+            fresh: &fresh,
+            points,
+            tracer,
+            dmin: p.dmin,
+            floor: pool.floor,
+        };
+        if !fresh.is_empty() {
+            step.eval(
+                &mut memo,
+                draws.iter().filter(|d| d.propose).map(|d| pick(d.j)),
+            );
+        }
+        // Accept or keep.
+        let (mut accepted, mut proposals) = (0usize, 0usize);
+        let mut state: Vec<Option<(Vpl, f32)>> = current
+            .into_iter()
+            .zip(&draws)
+            .map(|(cur, d)| {
+                if !d.propose || fresh.is_empty() {
+                    return cur;
+                }
+                proposals += 1;
+                let j = pick(d.j);
+                let ij = memo[j].expect("evaluated above");
+                match cur {
+                    Some((v, i)) if !mh_accept(i, ij, d.u) => Some((v, i)),
+                    _ => {
+                        accepted += 1;
+                        Some((fresh[j], ij))
+                    }
+                }
+            })
+            .collect();
+        // Escape: a chain on a VPL no camera point sees (I at the floor) takes the first
+        // of its escape proposals that some camera point sees.
+        let hidden = |s: &Option<(Vpl, f32)>| s.is_none_or(|(_, i)| i <= pool.floor);
+        if !fresh.is_empty() && p.knobs.mh_escape > 0 {
+            let escaping = state.iter().zip(&draws).filter(|(s, _)| hidden(s));
+            step.eval(
+                &mut memo,
+                escaping.flat_map(|(_, d)| d.escape.iter().map(|&x| pick(x))),
+            );
+            for (s, d) in state.iter_mut().zip(&draws) {
+                if hidden(s) {
+                    let seen = d
+                        .escape
+                        .iter()
+                        .map(|&x| pick(x))
+                        .find(|&k| memo[k].expect("evaluated above") > pool.floor);
+                    if let Some(k) = seen {
+                        *s = Some((fresh[k], memo[k].expect("evaluated above")));
+                    }
+                }
+            }
+        }
+        let (mut chosen, mut imp) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (v, i) in state.into_iter().flatten() {
+            chosen.push(v);
+            imp.push(i);
+        }
+        Stepped {
+            chosen,
+            imp,
+            acceptance: accepted as f32 / proposals.max(1) as f32,
+            fresh_paths: fresh_paths_n,
+            paths_s,
+        }
+    }
 }
 
 impl VplSampler for Mh {
@@ -185,96 +302,9 @@ impl VplSampler for Mh {
             let imp = idx.iter().map(|&i| pool.importance[i]).collect();
             (chosen, imp, 1.0, 0)
         } else {
-            let current = self.current(frame, tracer, &points, pool.floor);
-            let draws: Vec<Draws> = current
-                .iter()
-                .map(|cur| Draws {
-                    j: r.random(),
-                    u: r.random(),
-                    propose: r.random::<f32>() < rate || cur.is_none(),
-                    escape: (0..p.knobs.mh_escape).map(|_| r.random()).collect(),
-                })
-                .collect();
-            // Fresh candidates only when some chain proposes or may escape.
-            let wanted = draws.iter().zip(&current).any(|(d, c)| {
-                d.propose || (p.knobs.mh_escape > 0 && c.is_some_and(|(_, i)| i <= pool.floor))
-            });
-            let t_paths = Instant::now();
-            let (fresh, fresh_paths_n) = if wanted {
-                fresh_paths(frame, tracer, p.seed, f, p.candidates, false)
-            } else {
-                (Vec::new(), 0)
-            };
-            paths_s += t_paths.elapsed().as_secs_f64();
-            let pick = |x: f64| ((x * fresh.len() as f64) as usize).min(fresh.len() - 1);
-            let mut memo = vec![None; fresh.len()];
-            let step = Step {
-                fresh: &fresh,
-                points: &points,
-                tracer,
-                dmin: p.dmin,
-                floor: pool.floor,
-            };
-            if !fresh.is_empty() {
-                step.eval(
-                    &mut memo,
-                    draws.iter().filter(|d| d.propose).map(|d| pick(d.j)),
-                );
-            }
-            // Accept or keep.
-            let (mut accepted, mut proposals) = (0usize, 0usize);
-            let mut state: Vec<Option<(Vpl, f32)>> = current
-                .into_iter()
-                .zip(&draws)
-                .map(|(cur, d)| {
-                    if !d.propose || fresh.is_empty() {
-                        return cur;
-                    }
-                    proposals += 1;
-                    let j = pick(d.j);
-                    let ij = memo[j].expect("evaluated above");
-                    match cur {
-                        Some((v, i)) if !mh_accept(i, ij, d.u) => Some((v, i)),
-                        _ => {
-                            accepted += 1;
-                            Some((fresh[j], ij))
-                        }
-                    }
-                })
-                .collect();
-            // Escape: a chain on a VPL no camera point sees (I at the floor) takes the first
-            // of its escape proposals that some camera point sees.
-            let hidden = |s: &Option<(Vpl, f32)>| s.is_none_or(|(_, i)| i <= pool.floor);
-            if !fresh.is_empty() && p.knobs.mh_escape > 0 {
-                let escaping = state.iter().zip(&draws).filter(|(s, _)| hidden(s));
-                step.eval(
-                    &mut memo,
-                    escaping.flat_map(|(_, d)| d.escape.iter().map(|&x| pick(x))),
-                );
-                for (s, d) in state.iter_mut().zip(&draws) {
-                    if hidden(s) {
-                        let seen = d
-                            .escape
-                            .iter()
-                            .map(|&x| pick(x))
-                            .find(|&k| memo[k].expect("evaluated above") > pool.floor);
-                        if let Some(k) = seen {
-                            *s = Some((fresh[k], memo[k].expect("evaluated above")));
-                        }
-                    }
-                }
-            }
-            let (mut chosen, mut imp) = (Vec::with_capacity(n), Vec::with_capacity(n));
-            for (v, i) in state.into_iter().flatten() {
-                chosen.push(v);
-                imp.push(i);
-            }
-            (
-                chosen,
-                imp,
-                accepted as f32 / proposals.max(1) as f32,
-                fresh_paths_n,
-            )
+            let st = self.step(frame, tracer, &points, &pool, &p, (f, rate), &mut r);
+            paths_s += st.paths_s;
+            (st.chosen, st.imp, st.acceptance, st.fresh_paths)
         };
         self.chains = chosen.iter().map(key).collect();
         let traced = pool.paths + fresh_paths_n;

@@ -138,6 +138,36 @@ fn vertices(
     (v, imp)
 }
 
+/// Each half's renewal rate, from the other half's spread of importance now over at birth.
+fn rates(
+    particles: &[Particle],
+    p: &SamplerParams,
+    retraced: &[(Vec<Vpl>, Vec<f32>)],
+    first: bool,
+    follow: bool,
+) -> [f32; 2] {
+    if first {
+        [1.0f32; 2]
+    } else if follow {
+        let t: Vec<f64> = particles
+            .iter()
+            .zip(retraced)
+            .map(|(pa, (_, imp))| {
+                let now: f32 = imp.iter().sum();
+                (now + pa.floor) as f64 / (pa.i + pa.floor).max(f32::MIN_POSITIVE) as f64
+            })
+            .collect();
+        let half = |h: usize| -> Vec<f64> { t.iter().skip(h).step_by(2).copied().collect() };
+        let (d0, d1) = (spread(&half(0)), spread(&half(1)));
+        [
+            (p.knobs.smc_rate + p.knobs.smc_follow * d1 as f32).min(1.0),
+            (p.knobs.smc_rate + p.knobs.smc_follow * d0 as f32).min(1.0),
+        ]
+    } else {
+        [p.knobs.smc_rate; 2]
+    }
+}
+
 impl VplSampler for Smc {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = self.params.clone();
@@ -163,27 +193,7 @@ impl VplSampler for Smc {
                 .collect()
         };
         // Each half's rate, from the other half's spread.
-        let rates = if first {
-            [1.0f32; 2]
-        } else if follow {
-            let t: Vec<f64> = self
-                .particles
-                .iter()
-                .zip(&retraced)
-                .map(|(pa, (_, imp))| {
-                    let now: f32 = imp.iter().sum();
-                    (now + pa.floor) as f64 / (pa.i + pa.floor).max(f32::MIN_POSITIVE) as f64
-                })
-                .collect();
-            let half = |h: usize| -> Vec<f64> { t.iter().skip(h).step_by(2).copied().collect() };
-            let (d0, d1) = (spread(&half(0)), spread(&half(1)));
-            [
-                (p.knobs.smc_rate + p.knobs.smc_follow * d1 as f32).min(1.0),
-                (p.knobs.smc_rate + p.knobs.smc_follow * d0 as f32).min(1.0),
-            ]
-        } else {
-            [p.knobs.smc_rate; 2]
-        };
+        let rates = rates(&self.particles, &p, &retraced, first, follow);
         // Which slots renew: drawn before anything about the particles is known.
         let mut ru = rng(&[p.seed, f, 0x5c3c]);
         let renew: Vec<bool> = (0..n)
@@ -196,62 +206,17 @@ impl VplSampler for Smc {
         let mut selection = Selection::default();
         let mut paths_s = 0.0;
         // Newborns: (particle, its vertices and their importance).
-        let mut newborn: Vec<(Particle, Vec<Vpl>, Vec<f32>)> = Vec::with_capacity(k);
+        let mut newborn = Vec::new();
         if k > 0 {
-            let c = Candidates::new(
-                frame,
-                tracer,
-                &points,
-                p.seed,
-                f,
-                p.candidates,
-                p.knobs.eps,
-                p.dmin,
-            );
-            paths_s = c.paths_s;
-            selection.paths = c.paths;
-            if c.vpls.is_empty() {
+            let nb = newborns(frame, tracer, &points, &p, f, k);
+            (paths_s, selection.paths, selection.b) = (nb.paths_s, nb.paths, nb.b);
+            if nb.b.is_none() {
+                // No candidate left a vertex.
                 self.particles.clear();
                 selection.importance_s = t.elapsed().as_secs_f64() - paths_s;
                 return selection;
             }
-            selection.b = Some(c.b);
-            // The candidate paths (those that left no vertex too) and their floored importance:
-            // the sum of their vertices' plus one floor more, so that every path can be drawn.
-            let np = c.paths as usize;
-            let mut members: Vec<Vec<usize>> = vec![Vec::new(); np];
-            for (j, v) in c.vpls.iter().enumerate() {
-                members[(v.path - f * PATHS_PER_FRAME) as usize].push(j);
-            }
-            let target: Vec<f32> = members
-                .iter()
-                .map(|m| m.iter().map(|&j| c.raw[j]).sum::<f32>() + c.floor * (m.len() + 1) as f32)
-                .collect();
-            let mean = target.iter().map(|&x| x as f64).sum::<f64>() / np as f64;
-            let mut r = rng(&[p.seed, f, 0x5a3b]);
-            let idx = cdf_draw(&target, k, &mut r);
-            for i in idx {
-                let m = &members[i];
-                let vs: Vec<Vpl> = m.iter().map(|&j| c.vpls[j]).collect();
-                let imp: Vec<f32> = m.iter().map(|&j| c.raw[j]).collect();
-                let pa = Particle {
-                    path: f * PATHS_PER_FRAME + i as u64,
-                    xi: r.random(),
-                    w: (mean / (n as f64 * target[i] as f64)) as f32,
-                    i: imp.iter().sum(),
-                    floor: c.floor,
-                    last: vs.first().copied().unwrap_or(Vpl {
-                        position: Vec3::ZERO,
-                        normal: Vec3::Y,
-                        albedo: Vec3::ZERO,
-                        power: Vec3::ZERO,
-                        depth: 0,
-                        path: f * PATHS_PER_FRAME + i as u64,
-                        tri: 0,
-                    }),
-                };
-                newborn.push((pa, vs, imp));
-            }
+            newborn = nb.born;
         }
         let mut born = newborn.into_iter();
         let mut retraced = retraced.into_iter();
@@ -265,20 +230,7 @@ impl VplSampler for Smc {
                 let (vs, imp) = now.expect("a kept particle was re-traced");
                 (self.particles[particles.len()], vs, imp)
             };
-            let (v, weight) = if vs.is_empty() {
-                // No vertex in this frame: the slot is dark.
-                (
-                    Vpl {
-                        power: Vec3::ZERO,
-                        ..pa.last
-                    },
-                    0.0,
-                )
-            } else {
-                let (d, prob) = pick_vertex(&imp, pa.floor, pa.xi);
-                pa.last = vs[d];
-                (vs[d], pa.w / prob)
-            };
+            let (v, weight) = particle_vpl(&mut pa, &vs, &imp);
             shaded.push(ShadedVpl::new(&v, weight));
             vpls.push(v);
             particles.push(pa);
@@ -290,6 +242,100 @@ impl VplSampler for Smc {
         selection.importance_s = t.elapsed().as_secs_f64() - paths_s;
         selection
     }
+}
+
+/// The VPL a particle lights this frame with and its weight: the vertex its coin picks among
+/// `vs` (importance `imp`), or, with no vertex this frame, its last one dark.
+fn particle_vpl(pa: &mut Particle, vs: &[Vpl], imp: &[f32]) -> (Vpl, f32) {
+    if vs.is_empty() {
+        // No vertex in this frame: the slot is dark.
+        let dark = Vpl {
+            power: Vec3::ZERO,
+            ..pa.last
+        };
+        return (dark, 0.0);
+    }
+    let (d, prob) = pick_vertex(imp, pa.floor, pa.xi);
+    pa.last = vs[d];
+    (vs[d], pa.w / prob)
+}
+
+/// What the newborns of a frame are: each particle with its vertices and their importance,
+/// and the candidates' paths, their seconds and `b` (None: no candidate left a vertex).
+struct Newborns {
+    born: Vec<(Particle, Vec<Vpl>, Vec<f32>)>,
+    paths_s: f64,
+    paths: u64,
+    b: Option<f32>,
+}
+
+/// `k` newborn particles drawn as cdf draws them from the frame's candidate paths.
+fn newborns(
+    frame: &Frame,
+    tracer: &Tracer,
+    points: &[CameraPoint],
+    p: &SamplerParams,
+    f: u64,
+    k: usize,
+) -> Newborns {
+    let n = p.slots;
+    let c = Candidates::new(
+        frame,
+        tracer,
+        points,
+        p.seed,
+        f,
+        p.candidates,
+        p.knobs.eps,
+        p.dmin,
+    );
+    let mut out = Newborns {
+        born: Vec::with_capacity(k),
+        paths_s: c.paths_s,
+        paths: c.paths,
+        b: None,
+    };
+    if c.vpls.is_empty() {
+        return out;
+    }
+    out.b = Some(c.b);
+    // The candidate paths (those that left no vertex too) and their floored importance:
+    // the sum of their vertices' plus one floor more, so that every path can be drawn.
+    let np = c.paths as usize;
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); np];
+    for (j, v) in c.vpls.iter().enumerate() {
+        members[(v.path - f * PATHS_PER_FRAME) as usize].push(j);
+    }
+    let target: Vec<f32> = members
+        .iter()
+        .map(|m| m.iter().map(|&j| c.raw[j]).sum::<f32>() + c.floor * (m.len() + 1) as f32)
+        .collect();
+    let mean = target.iter().map(|&x| x as f64).sum::<f64>() / np as f64;
+    let mut r = rng(&[p.seed, f, 0x5a3b]);
+    let idx = cdf_draw(&target, k, &mut r);
+    for i in idx {
+        let m = &members[i];
+        let vs: Vec<Vpl> = m.iter().map(|&j| c.vpls[j]).collect();
+        let imp: Vec<f32> = m.iter().map(|&j| c.raw[j]).collect();
+        let pa = Particle {
+            path: f * PATHS_PER_FRAME + i as u64,
+            xi: r.random(),
+            w: (mean / (n as f64 * target[i] as f64)) as f32,
+            i: imp.iter().sum(),
+            floor: c.floor,
+            last: vs.first().copied().unwrap_or(Vpl {
+                position: Vec3::ZERO,
+                normal: Vec3::Y,
+                albedo: Vec3::ZERO,
+                power: Vec3::ZERO,
+                depth: 0,
+                path: f * PATHS_PER_FRAME + i as u64,
+                tri: 0,
+            }),
+        };
+        out.born.push((pa, vs, imp));
+    }
+    out
 }
 
 #[cfg(test)]
