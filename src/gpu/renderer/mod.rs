@@ -511,15 +511,20 @@ impl Renderer {
         Ok((!f.shadows_drawn && !f.input.lights.is_empty(), f.drawn))
     }
 
+    /// The mesh instances the raster passes cull by (none with culling off: all is drawn).
+    fn instances<'f>(&self, frame: &'f Frame) -> &'f [crate::scene::culling::Instance] {
+        if self.cull {
+            &frame.instances
+        } else {
+            &[]
+        }
+    }
+
     /// gbuffer: what the camera sees of the frame's instances, drawn into the G-buffer.
     pub(crate) fn encode_gbuffer(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
         let c = &self.config;
         let tris = self.tri_count as u32;
-        let instances: &[crate::scene::culling::Instance] = if self.cull {
-            &f.input.frame.instances
-        } else {
-            &[]
-        };
+        let instances = self.instances(f.input.frame);
         // The raster passes leave out the instances outside their view and the back faces of
         // closed ones.
         let (skip, view) = super::gbuffer::camera_view(f.view_proj, c.width, c.height);
@@ -533,11 +538,7 @@ impl Renderer {
 
     /// shadow_maps: the emitter samples' hemicube faces (kept while the geometry is still).
     pub(crate) fn encode_shadows(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
-        let instances: &[crate::scene::culling::Instance] = if self.cull {
-            &f.input.frame.instances
-        } else {
-            &[]
-        };
+        let instances = self.instances(f.input.frame);
         f.shadows_drawn = self.shadows.encode(
             &self.gpu,
             enc,
