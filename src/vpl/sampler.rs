@@ -85,6 +85,24 @@ pub struct SamplerParams {
     pub height: u32,
 }
 
+impl SamplerParams {
+    /// The frame's camera points for importance: `--camera-points` of them over the image.
+    pub fn camera_points(
+        &self,
+        frame: &Frame,
+        tracer: &Tracer,
+    ) -> Vec<crate::vpl::importance::CameraPoint> {
+        crate::vpl::importance::camera_points(
+            frame,
+            tracer,
+            self.width,
+            self.height,
+            self.knobs.camera_points as usize,
+            self.seed,
+        )
+    }
+}
+
 /// The frame's VPLs and what the run record says about them.
 #[derive(Clone, Debug, Default)]
 pub struct Selection {

@@ -6,7 +6,6 @@ use super::{SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::camera_points;
 use crate::vpl::Vpl;
 use std::time::Instant;
 
@@ -26,14 +25,7 @@ impl VplSampler for Cdf {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = &self.params;
         let t = Instant::now();
-        let points = camera_points(
-            frame,
-            tracer,
-            p.width,
-            p.height,
-            p.knobs.camera_points as usize,
-            p.seed,
-        );
+        let points = p.camera_points(frame, tracer);
         let c = Candidates::new(
             frame,
             tracer,

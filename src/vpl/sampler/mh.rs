@@ -26,7 +26,7 @@ use super::{SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::{camera_points, importance, CameraPoint};
+use crate::vpl::importance::{importance, CameraPoint};
 use crate::vpl::sampler::common::{fresh_paths, paths_by, PATHS_PER_FRAME};
 use crate::vpl::{trace_path, Vpl};
 use rand::Rng;
@@ -257,14 +257,7 @@ impl VplSampler for Mh {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = self.params.clone();
         let t = Instant::now();
-        let points = camera_points(
-            frame,
-            tracer,
-            p.width,
-            p.height,
-            p.knobs.camera_points as usize,
-            p.seed,
-        );
+        let points = p.camera_points(frame, tracer);
         let t_pool = Instant::now();
         let (vpls, paths) = paths_by(
             frame,

@@ -10,7 +10,7 @@ use super::{SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::{camera_points, importance, importance_all};
+use crate::vpl::importance::{importance, importance_all};
 use crate::vpl::{trace_path, ShadedVpl, Vpl};
 use rand::Rng;
 use std::time::Instant;
@@ -43,14 +43,7 @@ impl VplSampler for Rejection {
     fn select(&mut self, frame: &Frame, tracer: &Tracer, f: u64) -> Selection {
         let p = &self.params;
         let t = Instant::now();
-        let points = camera_points(
-            frame,
-            tracer,
-            p.width,
-            p.height,
-            p.knobs.camera_points as usize,
-            p.seed,
-        );
+        let points = p.camera_points(frame, tracer);
         let (pilot, _) = fresh_paths(frame, tracer, p.seed, PILOT + f, p.slots, false);
         let pi = importance_all(&pilot, &points, tracer, p.dmin);
         let target = (pi.iter().map(|&x| x as f64).sum::<f64>() / pi.len().max(1) as f64) as f32;

@@ -50,7 +50,7 @@ use super::{SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::{camera_points, importance, CameraPoint};
+use crate::vpl::importance::{importance, CameraPoint};
 use crate::vpl::{trace_path, ShadedVpl, Vpl};
 use glam::Vec3;
 use rand::Rng;
@@ -174,14 +174,7 @@ impl VplSampler for Smc {
         let t = Instant::now();
         let n = p.slots;
         let first = self.particles.len() != n;
-        let points = camera_points(
-            frame,
-            tracer,
-            p.width,
-            p.height,
-            p.knobs.camera_points as usize,
-            p.seed,
-        );
+        let points = p.camera_points(frame, tracer);
         // The kept particles' paths in this frame, with their vertices' importance.
         let follow = p.knobs.smc_follow > 0.0;
         let retraced: Vec<(Vec<Vpl>, Vec<f32>)> = if first {
