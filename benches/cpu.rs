@@ -71,7 +71,7 @@ fn bench(c: &mut Criterion) {
         kind,
         slots: 256,
         candidates: 1024,
-        dmin: 0.07,
+        clamp: 0.07,
         seed: 1,
         width: 256,
         height: 256,
@@ -99,7 +99,7 @@ fn bench(c: &mut Criterion) {
         });
     }
     g.finish();
-    let s = irad::reference::Params {
+    let s = irad::reference::ReferenceSettings {
         width: 32,
         height: 32,
         spp: 4,

@@ -40,7 +40,7 @@ fn main() -> anyhow::Result<()> {
     let scene = irad::commands::load_scene(cfg.scene_name())?;
     let f: u32 = a[2].parse()?;
     let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
-    let dmin = irad::resolve::dmin(&cfg, &scene);
+    let clamp = irad::resolve::clamp(&cfg, &scene);
     let gpu = std::sync::Arc::new(Gpu::new(cfg.backend)?);
     let mut p = Pipeline::new(gpu, scene.clone(), &cfg)?;
     let o = p.render_frame(f, true)?;
@@ -49,10 +49,10 @@ fn main() -> anyhow::Result<()> {
     let pts = twin::pixel_points(&frame, &tr, w, h);
     let lights = frame.emitter_samples(cfg.sequence.seed, cfg.quality.light_samples as usize);
     let dir = twin::direct(&frame, &tr, &pts, w, h, &lights);
-    let ind = twin::gather(&frame, &tr, &pts, w, h, &o.selection.shaded, dmin);
+    let ind = twin::gather(&frame, &tr, &pts, w, h, &o.selection.shaded, clamp);
     let gd = o.image.direct.as_ref().unwrap();
     let gi = o.image.indirect.as_ref().unwrap();
-    println!("dmin {dmin:.4}, {} VPLs", o.selection.shaded.len());
+    println!("clamp {clamp:.4}, {} VPLs", o.selection.shaded.len());
     println!(
         "direct   gpu {:.5}  twin {:.5}  ratio {:.4}",
         mean(gd),

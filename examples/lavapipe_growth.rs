@@ -48,7 +48,10 @@ fn main() -> anyhow::Result<()> {
     println!("adapter: {}", gpu.adapter);
     let mut src = include_str!("../shaders/direct.wgsl").to_string();
     if mode != "storage" {
-        src = src.replace("var<storage, read> P: Params", "var<uniform> P: Params");
+        src = src.replace(
+            "var<storage, read> P: FrameConstants",
+            "var<uniform> P: FrameConstants",
+        );
     }
     if mode == "noloop" {
         let a = src.find("    for (var j = 0u;").expect("the light loop");

@@ -25,7 +25,7 @@ fn params(
     kind: SamplerKind,
     slots: usize,
     rate: f32,
-    dmin: f32,
+    clamp: f32,
     seed: u64,
     size: u32,
 ) -> SamplerParams {
@@ -33,7 +33,7 @@ fn params(
         kind,
         slots,
         candidates: env("IRAD_PROBE_M", 4) as usize * slots,
-        dmin,
+        clamp,
         seed,
         width: size,
         height: size,
@@ -66,7 +66,7 @@ fn main() -> anyhow::Result<()> {
     let frames = env("IRAD_PROBE_FRAMES", 24);
     let seeds = env("IRAD_PROBE_SEEDS", 1).max(1);
     let (lo, hi) = scene.at(0.0).bounds();
-    let dmin = 0.02 * (hi - lo).length();
+    let clamp = 0.02 * (hi - lo).length();
     // The frames, their tracer, pixel points, and emission + direct light.
     let setup: Vec<(Frame, Tracer, Vec<Option<twin::SurfacePoint>>, Hdr)> = (0..frames)
         .map(|f| {
@@ -94,7 +94,7 @@ fn main() -> anyhow::Result<()> {
                 }
                 add(
                     base,
-                    &twin::gather(frame, tracer, pts, size, size, &sel.shaded, dmin),
+                    &twin::gather(frame, tracer, pts, size, size, &sel.shaded, clamp),
                 )
             })
             .collect();
@@ -119,7 +119,7 @@ fn main() -> anyhow::Result<()> {
                 .collect()
         }
         Err(_) => {
-            let (r, _) = render(params(SamplerKind::Frozen, 16384, 1.0, dmin, 1001, size));
+            let (r, _) = render(params(SamplerKind::Frozen, 16384, 1.0, clamp, 1001, size));
             let bytes: Vec<u8> = r
                 .iter()
                 .flat_map(|h| h.data.iter().flat_map(|c| c.to_array()))
@@ -142,7 +142,7 @@ fn main() -> anyhow::Result<()> {
         let (mut rel, mut f1, mut rep, mut first) = (0.0, 0.0, 0.0, String::new());
         let mut wf1 = 0.0;
         for seed in 7..7 + seeds as u64 {
-            let (imgs, replaced) = render(params(kind, 256, rate, dmin, seed, size));
+            let (imgs, replaced) = render(params(kind, 256, rate, clamp, seed, size));
             let m = irad::metrics::sequence(&numbers, &imgs, &reference)?;
             if seed == 7 {
                 first = format!("seed 7: {:.5} {:.5}", m.mean_rel_mse, m.flicker_f1);

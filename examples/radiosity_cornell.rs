@@ -7,7 +7,7 @@
 
 use irad::image::Hdr;
 use irad::metrics::frame_error;
-use irad::radiosity::{self, display, Method, Part, Settings};
+use irad::radiosity::{self, display, Part, RadiositySettings, Solver};
 use irad::reference;
 use irad::scene::builtin;
 use irad::trace::Tracer;
@@ -21,13 +21,13 @@ fn main() -> anyhow::Result<()> {
         .get(4)
         .cloned()
         .unwrap_or(format!("/tmp/irad-ref-{scene}-{size}-{spp}.exr"));
-    let methods: Vec<Method> = std::env::var("METHODS")
+    let methods: Vec<Solver> = std::env::var("METHODS")
         .unwrap_or("progressive,hierarchical,stochastic".into())
         .split(',')
         .map(|m| match m {
-            "hierarchical" => Method::Hierarchical,
-            "stochastic" => Method::Stochastic,
-            _ => Method::Progressive,
+            "hierarchical" => Solver::Hierarchical,
+            "stochastic" => Solver::Stochastic,
+            _ => Solver::Progressive,
         })
         .collect();
     let s = builtin::load_any(scene)?;
@@ -41,7 +41,7 @@ fn main() -> anyhow::Result<()> {
         let img = reference::render(
             &f,
             &tr,
-            &reference::Params {
+            &reference::ReferenceSettings {
                 width: size,
                 height: size,
                 spp,
@@ -59,12 +59,12 @@ fn main() -> anyhow::Result<()> {
     let out = std::env::var("OUT").ok();
     println!("method        part       relMSE   rel_bias  elements  links     iters  rays        solve_s");
     for m in methods {
-        let settings = Settings {
-            method: m,
+        let settings = RadiositySettings {
+            solver: m,
             element_size,
             max_elements,
             rays,
-            ..Settings::default()
+            ..RadiositySettings::default()
         };
         let sol = radiosity::solve(&f, &tr, &settings);
         for part in [Part::Reflected, Part::Indirect] {
@@ -73,7 +73,7 @@ fn main() -> anyhow::Result<()> {
                 &f,
                 &tr,
                 &shaded,
-                &display::View {
+                &display::DisplayView {
                     width: size,
                     height: size,
                     spp: 4,

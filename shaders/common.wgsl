@@ -21,14 +21,14 @@ struct Surface {
 
 // A VPL: position, unit normal (facing where its light arrived from), and its weighted flux
 // `power * albedo_y * weight` (RGB).
-struct Vpl {
+struct GpuVpl {
     pos: vec4f,
     normal: vec4f,
     flux: vec4f,
 }
 
 // An emitter sample for direct light: position, unit normal, and `Le / (pdf * count)`.
-struct LightSample {
+struct GpuEmitterSample {
     pos: vec4f,
     normal: vec4f,
     radiance: vec4f,
@@ -38,17 +38,17 @@ struct LightSample {
 }
 
 // Frame constants, the same buffer for every pass.
-struct Params {
+struct FrameConstants {
     width: u32,
     height: u32,
     num_vpls: u32,
     ism_size: u32,
-    points_per_vpl: u32,
+    ism_points: u32,
     num_points: u32,
     num_light_samples: u32,
     shadow_size: u32,
     far: f32,
-    dmin: f32,
+    clamp: f32,
     exposure: f32,
     ism_bias: f32,
     cam_pos: vec4f,

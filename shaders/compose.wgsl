@@ -6,9 +6,9 @@
 // lies on its own surface (normals within ~25 degrees, within 1% of the camera distance of
 // its tangent plane: `same_surface`), else of the nearest of the 8
 // neighbouring pixels' samples that does, else the pixel's own; times its own albedo. It
-// writes that per sub-sample (`indirect_ss`) for the resolve, and leaves the preview to it.
+// writes that per sub-sample (`indirect_ss`) for the downsample, and leaves the preview to it.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> direct: array<vec4f>;

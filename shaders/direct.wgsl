@@ -10,9 +10,9 @@
 // the pixel's resolve holds every sample once at the cost of one sample point per pixel
 // (with fewer samples, as from a few punctual lights, every sub-sample sums them all).
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
-@group(0) @binding(2) var<storage, read> lights: array<LightSample>;
+@group(0) @binding(2) var<storage, read> lights: array<GpuEmitterSample>;
 @group(0) @binding(3) var shadows: texture_2d_array<u32>;
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> direct: array<vec4f>;

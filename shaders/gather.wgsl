@@ -12,9 +12,9 @@
 // sub-sample the indirect light of the pixel's sample or of a neighbour's on its own surface
 // (indirect light is smooth), times its own albedo.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
-@group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(2) var<storage, read> vpls: array<GpuVpl>;
 @group(0) @binding(3) var<storage, read> ism: array<f32>;
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> indirect: array<vec4f>;
@@ -88,7 +88,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
                 continue;
             }
         }
-        sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, p.dmin * p.dmin)));
+        sum += v.flux.xyz * (cos_x * cos_y / (PI * PI * max(d2, p.clamp * p.clamp)));
     }
     if side > 1u {
         indirect[pix] = vec4f(sum * f32(step), 1.0);

@@ -10,7 +10,7 @@
 // Supersampled (P.aa = S > 1) the grid is S x S tiles, each a whole image: the window
 // keeps to the pixel's own tile.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> subsets: array<vec4f>;

@@ -10,7 +10,7 @@
 // coarser levels in workgroup memory (the same values; `src/gpu/ism.rs` has the CPU twin).
 // Only the tiles of `slots[k].x`, k < P.num_changed, are redone; the others keep theirs.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read_write> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(3) var<storage, read> slots: array<vec2u>;

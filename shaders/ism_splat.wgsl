@@ -6,7 +6,7 @@
 // its cell's. `slots[k]` = (slot, its offset into the point set) for k < P.num_changed; other
 // slots keep their tiles.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 struct Point {
     tri: u32,
@@ -15,7 +15,7 @@ struct Point {
     pad: u32,
 }
 @group(0) @binding(2) var<storage, read> points: array<Point>;
-@group(0) @binding(3) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(3) var<storage, read> vpls: array<GpuVpl>;
 @group(0) @binding(4) var<storage, read> slots: array<vec2u>;
 @group(0) @binding(5) var<storage, read_write> atlas: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> near: array<atomic<u32>>;
@@ -44,16 +44,16 @@ fn clear(@builtin(global_invocation_id) gid: vec3u) {
 fn main(@builtin(global_invocation_id) gid: vec3u) {
     let j = gid.x;
     let k = gid.y;
-    if j >= P.points_per_vpl + P.near_points || k >= P.num_changed {
+    if j >= P.ism_points + P.near_points || k >= P.num_changed {
         return;
     }
     let s = slots[k].x;
     var pt: Point;
-    if j < P.points_per_vpl {
+    if j < P.ism_points {
         pt = points[(slots[k].y + j) % P.num_points];
     } else {
         // The slot's ray-cast near-field points, after the point set; a miss is no point.
-        pt = points[P.num_points + s * P.near_points + j - P.points_per_vpl];
+        pt = points[P.num_points + s * P.near_points + j - P.ism_points];
         if pt.tri == 0xffffffffu {
             return;
         }
@@ -72,7 +72,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let texel = paraboloid_texel(dir, v.normal.xyz, P.ism_size);
     let depth = 16777216u - u32(clamp(dist / P.far, 0.0, 1.0) * 16777215.0);
-    if j < P.points_per_vpl {
+    if j < P.ism_points {
         atomicMax(&atlas[s * P.ism_size * P.ism_size + texel], depth);
     } else {
         let n = P.near_grid;

@@ -2,7 +2,7 @@
 // emitted radiance (factor x emissive texture), for scenes with textures or vertex colours.
 // Textures are sampled by `texture.wgsl` (prepended).
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
 @group(0) @binding(2) var gbuf: texture_2d<u32>;
 @group(0) @binding(3) var<storage, read> attrs: array<TriAttr>;

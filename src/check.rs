@@ -1,5 +1,6 @@
 //! The checks every numeric setting goes through: NaN, infinity, sign and range, with a
-//! message that names the setting as the user typed it (`--exposure NaN is not a number`).
+//! message that names the setting as the caller passes it: in backquotes, the setting's name
+//! (`` `exposure` NaN is not a number ``), which `irad`'s CLI reports as its flag.
 
 use anyhow::{bail, Result};
 use std::fmt::Display;

@@ -87,6 +87,40 @@ impl Command {
     }
 }
 
+/// An error as the command line reports it: each setting the library names (`` `ism_size` ``)
+/// written as the flag that sets it (`--ism-size`), from the flags of every subcommand.
+pub fn report(e: &anyhow::Error) -> String {
+    use clap::CommandFactory;
+    let cmd = Cli::command();
+    let mut flags = std::collections::HashSet::new();
+    for sub in std::iter::once(&cmd).chain(cmd.get_subcommands()) {
+        for a in sub.get_arguments() {
+            if let Some(l) = a.get_long() {
+                flags.insert(l.replace('-', "_"));
+            }
+        }
+    }
+    let text = format!("{e:#}");
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text.as_str();
+    while let Some(a) = rest.find('`') {
+        let Some(b) = rest[a + 1..].find('`') else {
+            break;
+        };
+        let name = &rest[a + 1..a + 1 + b];
+        out.push_str(&rest[..a]);
+        if flags.contains(name) {
+            out.push_str("--");
+            out.push_str(&name.replace('_', "-"));
+        } else {
+            out.push_str(&rest[a..a + b + 2]);
+        }
+        rest = &rest[a + b + 2..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> Result<()> {
     use crate::commands;
@@ -121,6 +155,62 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scenes { scene, generate } => {
             commands::scenes(scene.as_deref(), generate.as_deref())
         }
+    }
+}
+
+/// The knobs' flags, one a knob of [`config::KNOBS`]: its name, help, default and value type.
+impl clap::Args for config::SamplerKnobs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        config::KNOBS.iter().fold(cmd, |cmd, k| {
+            // clap keeps names as &'static str: the few built here live for the process.
+            let leak = |s: String| -> &'static str { Box::leak(s.into_boxed_str()) };
+            let help: Vec<&str> = k.help.lines().map(str::trim).collect();
+            let mut a = clap::Arg::new(k.name)
+                .long(k.name)
+                .help(help.join(" "))
+                .allow_hyphen_values(true)
+                .value_name(leak(k.name.to_uppercase().replace('-', "_")));
+            a = if k.integer() {
+                a.value_parser(clap::value_parser!(u32))
+            } else {
+                a.value_parser(clap::value_parser!(f32))
+            };
+            if let Some(d) = k.default() {
+                a = a.default_value(leak(if k.integer() {
+                    (d as u32).to_string()
+                } else {
+                    (d as f32).to_string()
+                }));
+            }
+            cmd.arg(a)
+        })
+    }
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl clap::FromArgMatches for config::SamplerKnobs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> std::result::Result<Self, clap::Error> {
+        let mut k = config::SamplerKnobs::default();
+        k.update_from_arg_matches(m)?;
+        Ok(k)
+    }
+    fn update_from_arg_matches(
+        &mut self,
+        m: &clap::ArgMatches,
+    ) -> std::result::Result<(), clap::Error> {
+        for k in config::KNOBS {
+            let v = if k.integer() {
+                m.get_one::<u32>(k.name).map(|&v| v as f64)
+            } else {
+                m.get_one::<f32>(k.name).map(|&v| v as f64)
+            };
+            if let Some(v) = v {
+                k.set(self, v);
+            }
+        }
+        Ok(())
     }
 }
 

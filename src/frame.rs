@@ -123,8 +123,8 @@ impl Pipeline {
             &GpuFrame {
                 frame: &frame,
                 vpls: &selection.shaded,
-                lights: &lights,
-                dmin: s.dmin,
+                emitter_samples: &lights,
+                clamp: s.clamp,
                 near: &near,
             },
             components,
@@ -171,7 +171,7 @@ impl Pipeline {
             let light = crate::compensation::Light {
                 samples: &lights,
                 vpls: &selection.shaded,
-                dmin: s.dmin,
+                clamp: s.clamp,
             };
             let added = crate::compensation::compensate(
                 &frame,
@@ -206,7 +206,7 @@ impl Pipeline {
 /// emitters are still, gives the indirect light; the GPU's passes give emission and direct
 /// light as for instant radiosity (with no VPLs).
 struct Classical {
-    settings: radiosity::Settings,
+    settings: radiosity::RadiositySettings,
     cache: radiosity::Cache,
     pass: RadiosityPass,
 }

@@ -356,7 +356,7 @@ mod tests {
             ),
             (
                 "gpu/ism.rs",
-                "use crate::{radiosity::Method};\n",
+                "use crate::{radiosity::Solver};\n",
                 "radiosity",
             ),
         ];

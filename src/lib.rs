@@ -4,6 +4,7 @@
 //! comparison.
 
 pub mod check;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod commands;
 pub mod compensation;

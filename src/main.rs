@@ -7,7 +7,7 @@ fn main() {
         if irad::commands::is_closed_pipe(&e) {
             std::process::exit(0);
         }
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", irad::cli::report(&e));
         std::process::exit(1);
     }
 }

@@ -3,7 +3,7 @@
 //! recorded in `run.json`. What `0` (from the scene) means for each setting is here: the
 //! emitter samples from the direct light's variance where the camera looks ([`light_samples`]),
 //! the ISM points from what a VPL sees ([`ism_points`]), the interleave block from the VPL
-//! count ([`interleave_for`]), the distance clamp from the scene's size ([`dmin`]), the
+//! count ([`interleave_for`]), the distance clamp from the scene's size ([`clamp`]), the
 //! adapter's caps on them.
 
 use crate::config::Render;
@@ -22,7 +22,7 @@ pub struct Resolved {
     /// The sampler's parameters, the distance clamp among them.
     pub sampler: SamplerParams,
     /// A classical method's solver settings (None for instant radiosity).
-    pub radiosity: Option<crate::radiosity::Settings>,
+    pub radiosity: Option<crate::radiosity::RadiositySettings>,
 }
 
 /// Resolves `cfg` (validated) for `scene`, whose frame 0 is `frame0` traced by `tracer`, on an
@@ -41,18 +41,20 @@ pub fn resolve(
     let em = &frame0.emitters;
     if renderer.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
         bail!(
-            "--light-samples {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
+            "`light_samples` {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
             renderer.light_samples,
             scene.name
         );
     }
-    renderer.points_per_vpl = ism_points(cfg, frame0, tracer);
-    renderer.num_points = ism_point_set_size(renderer.points_per_vpl, frame0.tris.len());
+    renderer.ism_points = ism_points(cfg, frame0, tracer);
+    renderer.num_points = ism_point_set_size(renderer.ism_points, frame0.tris.len());
     Ok(Resolved {
         renderer,
         sampler: sampler_params(cfg, scene),
-        radiosity: (cfg.method != crate::radiosity::Method::Instant)
-            .then(|| radiosity_settings(cfg, scene)),
+        radiosity: cfg
+            .method
+            .solver()
+            .map(|solver| radiosity_settings(cfg, solver, scene)),
     })
 }
 
@@ -123,16 +125,16 @@ pub fn ism_points_for(ism_size: u32, pull_levels: u32, seen: f32, triangles: usi
 /// `--ism-points 0`'s detail term: a point a slot for every this many triangles.
 pub const TRIANGLES_PER_ISM_POINT: usize = 32;
 
-/// Points in the ISM point set of a scene of `triangles` triangles for `points_per_vpl` points
+/// Points in the ISM point set of a scene of `triangles` triangles for `ism_points` points
 /// a slot: 16 slots' worth or one a triangle, whichever is more (a point set smaller than the
 /// triangle count leaves small triangles, a column's facets, with no point in any tile),
 /// between 2^16 and 2^22, and never fewer than one slot's.
-pub fn ism_point_set_size(points_per_vpl: u32, triangles: usize) -> u32 {
-    points_per_vpl
+pub fn ism_point_set_size(ism_points: u32, triangles: usize) -> u32 {
+    ism_points
         .saturating_mul(16)
         .max(triangles.min(u32::MAX as usize) as u32)
         .clamp(1 << 16, 1 << 22)
-        .max(points_per_vpl)
+        .max(ism_points)
 }
 
 /// The GPU renderer's sizes before the scene is seen, for checking a render's settings
@@ -150,9 +152,9 @@ pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
     RendererConfig {
         width: cfg.sequence.size.width,
         height: cfg.sequence.size.height,
-        max_vpls: cfg.vpls,
+        slots: cfg.vpls,
         ism_size: q.ism_size,
-        points_per_vpl: points,
+        ism_points: points,
         num_points: ism_point_set_size(points, triangles),
         pull_levels: q.pull_levels,
         ism_bias: q.ism_bias,
@@ -229,7 +231,7 @@ pub fn light_samples(cfg: &Render, frame0: &Frame, tracer: &Tracer, most: u32) -
 }
 
 /// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
-pub fn dmin(cfg: &Render, scene: &Scene) -> f32 {
+pub fn clamp(cfg: &Render, scene: &Scene) -> f32 {
     cfg.clamp.unwrap_or_else(|| {
         let (lo, hi) = scene.at(0.0).bounds();
         0.02 * (hi - lo).length()
@@ -237,10 +239,14 @@ pub fn dmin(cfg: &Render, scene: &Scene) -> f32 {
 }
 
 /// The classical solver's settings for `scene` (element size from its size).
-pub fn radiosity_settings(cfg: &Render, scene: &Scene) -> crate::radiosity::Settings {
+pub fn radiosity_settings(
+    cfg: &Render,
+    solver: crate::radiosity::Solver,
+    scene: &Scene,
+) -> crate::radiosity::RadiositySettings {
     let (lo, hi) = scene.at(0.0).bounds();
-    crate::radiosity::Settings {
-        method: cfg.method,
+    crate::radiosity::RadiositySettings {
+        solver,
         // 0.15 in the Cornell box, whose bounding-box diagonal is 3.46.
         element_size: 0.0433 * (hi - lo).length(),
         seed: cfg.sequence.seed,
@@ -256,7 +262,7 @@ pub fn sampler_params(cfg: &Render, scene: &Scene) -> SamplerParams {
         slots: cfg.vpls as usize,
         candidates: s.candidates(cfg.vpls) as usize,
         knobs: s.knobs.clone(),
-        dmin: dmin(cfg, scene),
+        clamp: clamp(cfg, scene),
         seed: cfg.sequence.seed,
         width: cfg.sequence.size.width,
         height: cfg.sequence.size.height,

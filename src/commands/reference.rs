@@ -26,8 +26,8 @@ struct ReferenceFrame {
 }
 
 /// The reference renderer's parameters for a sequence and spp.
-pub fn params(seq: &config::Sequence, spp: u32) -> crate::reference::Params {
-    crate::reference::Params {
+pub fn params(seq: &config::Sequence, spp: u32) -> crate::reference::ReferenceSettings {
+    crate::reference::ReferenceSettings {
         width: seq.size.width,
         height: seq.size.height,
         spp,

@@ -28,8 +28,8 @@ pub struct FrameRecord {
     pub paths: u64,
     pub replaced: f32,
     pub acceptance: Option<f32>,
-    /// MH: the frame's proposal rate.
-    pub mh_rate: Option<f32>,
+    /// MH: the frame's proposal rate; SMC: its renewal rate (the sampler's `renewal_rate`).
+    pub renewal_rate: Option<f32>,
     pub b: Option<f32>,
     pub importance_seconds: f64,
     pub mean_rgb: [f32; 3],
@@ -58,7 +58,7 @@ impl FrameRecord {
             paths: fo.selection.paths,
             replaced: fo.selection.replaced,
             acceptance: fo.selection.acceptance,
-            mh_rate: fo.selection.mh_rate,
+            renewal_rate: fo.selection.renewal_rate,
             b: fo.selection.b,
             importance_seconds: fo.selection.importance_s,
             mean_rgb: fo.image.hdr.mean().to_array(),
@@ -186,7 +186,7 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     )?;
     crate::outln!("adapter: {adapter}")?;
     let method = match cfg.method {
-        crate::radiosity::Method::Instant => {
+        crate::config::Method::Instant => {
             format!("{} VPLs, sampler {}", cfg.vpls, cfg.sampler.kind)
         }
         m => format!("method {}", m.name()),

@@ -2,21 +2,21 @@
 //! default): the light that the distance clamp of the gather leaves out, added back by short
 //! rays, after Kollig & Keller (2004). docs/math.md section 4 has the derivation.
 //!
-//! The gather divides by `max(d^2, dmin^2)` instead of `d^2`, so a VPL at `y` closer than
-//! `dmin` to the receiver `x` gives `1 - d^2 / dmin^2` less than it should. Summed over the
+//! The gather divides by `max(d^2, clamp^2)` instead of `d^2`, so a VPL at `y` closer than
+//! `clamp` to the receiver `x` gives `1 - d^2 / clamp^2` less than it should. Summed over the
 //! VPLs and written over the directions from `x`, what is missing is
 //!
-//! `L_c(x) = rho_x / pi * integral of L_r(y(w)) * max(0, 1 - d^2 / dmin^2) cos(theta_x) dw`,
+//! `L_c(x) = rho_x / pi * integral of L_r(y(w)) * max(0, 1 - d^2 / clamp^2) cos(theta_x) dw`,
 //!
 //! with `y(w)` the first surface along `w` at distance `d` and `L_r(y)` the light reflected
 //! there (direct and indirect, no emission: that is what the VPLs stand for). With `K`
-//! cosine-distributed rays of length `dmin` from the pixel's surface point, the estimate is
-//! `rho_x / K * sum of L_r(y_k) (1 - d_k^2 / dmin^2)`. `L_r(y)` is the frame's own estimate at
+//! cosine-distributed rays of length `clamp` from the pixel's surface point, the estimate is
+//! `rho_x / K * sum of L_r(y_k) (1 - d_k^2 / clamp^2)`. `L_r(y)` is the frame's own estimate at
 //! `y` with exact visibility: its emitter samples, and a stratified subset of its VPLs
 //! (each weighted by the share it stands for), clamped as the gather is. The part of `L_r`
 //! that the clamp takes from `y` itself is not added back (a second-order term, left out).
 //!
-//! Rays exist only where surfaces meet within `dmin` (creases, corners, contacts); the random
+//! Rays exist only where surfaces meet within `clamp` (creases, corners, contacts); the random
 //! numbers of a pixel are the same every frame, so a still view's compensation is still.
 
 use crate::math::{cosine_hemisphere, rng};
@@ -36,10 +36,10 @@ pub const VPLS_AT_HIT: usize = 32;
 pub struct Light<'a> {
     pub samples: &'a [EmitterSample],
     pub vpls: &'a [ShadedVpl],
-    pub dmin: f32,
+    pub clamp: f32,
 }
 
-/// The light the clamp left out at each pixel whose surface has another within `dmin`:
+/// The light the clamp left out at each pixel whose surface has another within `clamp`:
 /// (pixel index, radiance to add), from `rays` rays a pixel (0: none); `points` are the
 /// pixels' surface points (`reference::twin::pixel_points`).
 pub fn compensate(
@@ -50,7 +50,7 @@ pub fn compensate(
     rays: u32,
     seed: u64,
 ) -> Vec<(usize, Vec3)> {
-    if rays == 0 || light.dmin <= 0.0 || light.vpls.is_empty() && light.samples.is_empty() {
+    if rays == 0 || light.clamp <= 0.0 || light.vpls.is_empty() && light.samples.is_empty() {
         return Vec::new();
     }
     points
@@ -74,15 +74,15 @@ pub fn at_point(
     stream: &[u64],
 ) -> Vec3 {
     let mut r = rng(stream);
-    let dmin = light.dmin;
+    let clamp = light.clamp;
     let mut sum = Vec3::ZERO;
     for k in 0..rays {
         let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
         let w = cosine_hemisphere(s.n, u);
-        let Some(h) = tracer.intersect(tracer.offset(s.x, s.n, w), w, dmin) else {
+        let Some(h) = tracer.intersect(tracer.offset(s.x, s.n, w), w, clamp) else {
             continue;
         };
-        let weight = 1.0 - (h.t / dmin).powi(2);
+        let weight = 1.0 - (h.t / clamp).powi(2);
         if weight <= 0.0 {
             continue;
         }
@@ -119,7 +119,7 @@ fn reflected(frame: &Frame, tracer: &Tracer, y: &SurfacePoint, light: &Light, u:
     let indirect: Vec3 = (0..m)
         .map(|j| &light.vpls[(first + j * n / m) % n])
         .map(|v| {
-            let c = v.radiance_at(y.x, y.n, rho, light.dmin);
+            let c = v.radiance_at(y.x, y.n, rho, light.clamp);
             if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {
                 Vec3::ZERO
             } else {

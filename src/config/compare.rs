@@ -3,46 +3,46 @@
 
 use super::*;
 use anyhow::{bail, Result};
-use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 
 /// `irad compare`: samplers x VPL counts against a cached reference.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Compare {
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub sequence: Sequence,
     /// Methods to compare: instant (every sampler x VPL count) and classical radiosity
     /// solvers (progressive, hierarchical, stochastic: one run each)
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().methods)]
-    pub methods: Vec<crate::radiosity::Method>,
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().methods))]
+    pub methods: Vec<Method>,
     /// Samplers to compare
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().samplers)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_delimiter = ',', default_values_t = Compare::default().samplers))]
     pub samplers: Vec<SamplerKind>,
     /// VPL counts to compare
-    #[arg(long, value_delimiter = ',', default_values_t = Compare::default().vpls, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_values_t = Compare::default().vpls, allow_hyphen_values = true))]
     pub vpls: Vec<u32>,
     /// Samples per pixel of the reference
-    #[arg(long, default_value_t = Compare::default().spp, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Compare::default().spp, allow_hyphen_values = true))]
     pub spp: u32,
     /// Output folder
-    #[arg(long, default_value_os_t = Compare::default().out)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Compare::default().out))]
     pub out: PathBuf,
     /// Where reference frames are cached (keyed by scene, size, spp, fps and seed)
-    #[arg(long, default_value_os_t = Compare::default().cache)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Compare::default().cache))]
     pub cache: PathBuf,
     /// The VPL count whose animations the report shows [default: the middle one]
-    #[arg(long, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, allow_hyphen_values = true))]
     pub show_vpls: Option<u32>,
     /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-follow, mh-escape,
     /// smc-rate, smc-follow, eps, candidates, camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
     /// more. The swept sampler runs once per value and VPL count, drawn as one curve on the
     /// flicker-against-error charts; other samplers draw a curve over --vpls
-    #[arg(long, value_name = "SAMPLER:KNOB=V1,V2,..")]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "SAMPLER:KNOB=V1,V2,.."))]
     pub sweep: Vec<Sweep>,
     /// Every run's renderer settings besides the sampler kind and VPL count (--mh-rate,
     /// --ism-size, --backend, --exposure, ...)
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub render: CompareRender,
 }
 
@@ -57,16 +57,12 @@ pub struct Sweep {
 impl std::str::FromStr for Sweep {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        use clap::ValueEnum;
         let form = "it must be SAMPLER:KNOB=V1,V2,... (e.g. mh:mh-rate=0.01,0.1,1)";
         let (sampler, rest) = s
             .split_once(':')
             .ok_or_else(|| format!("'{s}' names no sampler: {form}"))?;
-        let sampler = SamplerKind::from_str(sampler.trim(), true).map_err(|_| {
-            let names: Vec<String> = SamplerKind::value_variants()
-                .iter()
-                .filter_map(|k| k.to_possible_value().map(|v| v.get_name().to_string()))
-                .collect();
+        let sampler = SamplerKind::parse(sampler.trim()).ok_or_else(|| {
+            let names: Vec<&str> = SamplerKind::ALL.iter().map(|k| k.name()).collect();
             format!(
                 "'{sampler}' in '{s}' is not a sampler ({})",
                 names.join(", ")
@@ -121,21 +117,22 @@ impl Serialize for Sweep {
 
 /// What every run of a comparison shares: the renderer's knobs except the sampler kind, the
 /// VPL count, the sequence and the output folder, which the comparison sets per run.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct CompareRender {
     /// Distance clamp dmin (see `irad render --help`)
-    #[arg(long, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, allow_hyphen_values = true))]
     pub clamp: Option<f32>,
     /// The samplers' knobs (--mh-rate, --eps, ...: see `irad render --help`)
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub knobs: SamplerKnobs,
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub quality: Quality,
     /// Graphics backend
-    #[arg(long, value_enum, default_value_t = Render::default().backend)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().backend))]
     pub backend: BackendChoice,
     /// Exposure of previews
-    #[arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
 }
 
@@ -156,7 +153,7 @@ impl Default for Compare {
     fn default() -> Self {
         Compare {
             sequence: Sequence::default(),
-            methods: vec![crate::radiosity::Method::Instant],
+            methods: vec![Method::Instant],
             samplers: vec![SamplerKind::Uniform, SamplerKind::Cdf, SamplerKind::Mh],
             vpls: vec![64, 256, 1024],
             spp: 256,
@@ -189,7 +186,7 @@ impl Compare {
         let r = &self.render;
         Render {
             sequence: self.sequence.clone(),
-            method: crate::radiosity::Method::Instant,
+            method: Method::Instant,
             vpls,
             clamp: r.clamp,
             sampler: SamplerConfig {
@@ -216,24 +213,24 @@ impl Compare {
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
         if self.methods.is_empty() {
-            bail!("--methods needs at least one method");
+            bail!("`methods` needs at least one method");
         }
         if self.samplers.is_empty() {
-            bail!("--samplers needs at least one sampler");
+            bail!("`samplers` needs at least one sampler");
         }
         if self.vpls.is_empty() {
-            bail!("--vpls needs at least one VPL count");
+            bail!("`vpls` needs at least one VPL count");
         }
         if self.spp < 2 {
             bail!(
-                "--spp {}: the reference is traced as two independent halves (to measure its own noise), so it needs at least 2 samples per pixel",
+                "`spp` {}: the reference is traced as two independent halves (to measure its own noise), so it needs at least 2 samples per pixel",
                 self.spp
             );
         }
-        check::int("--spp", self.spp, 2, MAX_SPP)?;
+        check::int("`spp`", self.spp, 2, MAX_SPP)?;
         if let Some(v) = self.show_vpls {
             if !self.vpls.contains(&v) {
-                bail!("--show-vpls {v} is not one of --vpls {:?}", self.vpls);
+                bail!("`show_vpls` {v} is not one of `vpls` {:?}", self.vpls);
             }
         }
         // Every run's settings, checked before anything renders.
@@ -246,39 +243,36 @@ impl Compare {
             if !self.samplers.contains(&sw.sampler) {
                 let names: Vec<String> = self.samplers.iter().map(|s| s.to_string()).collect();
                 bail!(
-                    "--sweep {sw}: {} is not one of --samplers {}",
+                    "`sweep` {sw}: {} is not one of `samplers` {}",
                     sw.sampler,
                     names.join(",")
                 );
             }
             if !sw.knob.used_by(sw.sampler) {
-                let used: Vec<&str> = KNOBS
+                let used: Vec<String> = KNOBS
                     .iter()
                     .filter(|k| k.used_by(sw.sampler))
-                    .map(|k| k.name)
+                    .map(|k| k.setting())
                     .collect();
                 bail!(
-                    "--sweep {sw}: {} does not use --{} (it uses {})",
+                    "`sweep` {sw}: {} does not use {} (it uses {})",
                     sw.sampler,
-                    sw.knob,
+                    sw.knob.setting(),
                     if used.is_empty() {
-                        "none of the knobs; sweep --vpls instead".to_string()
+                        "none of the knobs; sweep `vpls` instead".to_string()
                     } else {
-                        used.iter()
-                            .map(|k| format!("--{k}"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        used.join(", ")
                     }
                 );
             }
             if sw.values.is_empty() {
-                bail!("--sweep {sw}: no values");
+                bail!("`sweep` {sw}: no values");
             }
             for &x in &sw.values {
                 for &v in &self.vpls {
                     self.run_with(sw.sampler, v, Some((sw.knob, x)))
                         .validate()
-                        .map_err(|e| anyhow::anyhow!("--sweep {sw}: {e}"))?;
+                        .map_err(|e| anyhow::anyhow!("`sweep` {sw}: {e}"))?;
                 }
             }
         }

@@ -1,90 +1,125 @@
-//! Every command's settings, in the library: the sequence to render ([`Sequence`]), the
-//! sampler ([`SamplerConfig`]), the GPU's quality knobs ([`Quality`]), and one type per
-//! command ([`Render`], [`Reference`], [`Compare`], [`Bench`]). Each has `Default` (the one
-//! place a default lives: the CLI's help reads it from here) and one `validate()` that every
-//! command calls before it renders anything. A Rust program fills these and calls
-//! [`crate::render::render`] and friends; `irad`'s CLI only maps flags onto them.
+//! The commands' settings: one type per command ([`Render`], [`Reference`], [`Compare`],
+//! [`Bench`]) and what they share ([`Sequence`]), made of the stages' own settings types,
+//! re-exported here: the sampler's [`SamplerConfig`] (`vpl::sampler`, its knobs declared once
+//! in `vpl::sampler::knobs`) and the renderer's [`Quality`] (`gpu`). Each type has `Default`
+//! (the one place a default lives: the CLI's help reads it from there) and one `validate()`
+//! that every command calls before it renders anything. A Rust program fills these and calls
+//! `commands::render::render` and friends.
 //!
-//! Every numeric value goes through [`check`]: NaN, infinity, sign and range, with a message
-//! that names the flag as the user typed it (`--exposure NaN is not a finite number`).
+//! Every numeric value goes through [`check`]: NaN, infinity, sign and range. Errors name the
+//! setting in backquotes (`` `exposure` NaN is not a number ``); the library has no clap in
+//! it (`cargo check --lib --no-default-features`): with the `cli` feature the same types carry
+//! clap's derive, and `irad`'s error report writes each named setting as its flag
+//! (`--exposure NaN is not a number`, `cli::report`).
 
 use crate::gpu::BackendChoice;
 pub use crate::vpl::sampler::knobs::{Knob, SamplerKnobs, KNOBS};
 use crate::vpl::sampler::SamplerKind;
 use anyhow::{bail, Result};
-use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 
 pub use crate::check;
 
 mod compare;
-mod quality;
-mod sampler;
 mod sequence;
 
+pub use crate::gpu::{Quality, MAX_SIZE};
+pub use crate::vpl::sampler::SamplerConfig;
 pub use compare::*;
-pub use quality::*;
-pub use sampler::*;
 pub use sequence::*;
 
 /// Exposure of the PNG previews: a positive finite factor.
 pub fn check_exposure(exposure: f32) -> Result<()> {
-    check::float("--exposure", exposure, 0.0, true, 1e6)
+    check::float("`exposure`", exposure, 0.0, true, 1e6)
 }
 
 /// `irad render`: GPU instant radiosity of a sequence.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Render {
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub sequence: Sequence,
     /// Global-illumination method: instant radiosity (VPLs), or a classical radiosity solver
     /// whose view-independent solution gives the indirect light (kept while geometry and
     /// lights are still)
-    #[arg(long, value_enum, default_value_t = Render::default().method)]
-    pub method: crate::radiosity::Method,
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().method))]
+    pub method: Method,
     /// VPL slots per frame
-    #[arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true))]
     pub vpls: u32,
     /// Distance clamp dmin of the VPL contribution, in scene units (0: off)
     /// [default: 2% of the scene's bounding-box diagonal]
-    #[arg(long, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, allow_hyphen_values = true))]
     pub clamp: Option<f32>,
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub sampler: SamplerConfig,
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub quality: Quality,
     /// Graphics backend (also WGPU_BACKEND=vulkan|gl|metal|dx12 with auto)
-    #[arg(long, value_enum, default_value_t = Render::default().backend)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().backend))]
     pub backend: BackendChoice,
     /// Output folder
-    #[arg(long, default_value_os_t = Render::default().out)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Render::default().out))]
     pub out: PathBuf,
     /// Exposure of the PNG previews (EXR files are linear, unscaled)
-    #[arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
     /// Also write each frame's direct and indirect light (frame_FFFF_direct.exr/.png, _indirect)
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub components: bool,
     /// How the GPU passes are submitted and timed: auto (timestamp queries where they time
     /// the passes, else serialized), timestamps, serialized (a wait after each pass), off (one
     /// submission, no per-pass times)
-    #[arg(long, value_enum, default_value_t = Render::default().profiling)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().profiling))]
     pub profiling: ProfilingChoice,
     /// Redraw everything every frame: no reuse of shadow maps, ISM tiles and uploads (for
     /// measuring what reuse saves; the frames are the same bits)
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub no_reuse: bool,
     /// Draw every triangle in every view (the G-buffer and shadow maps otherwise leave out the
     /// mesh instances outside the view and the back faces of closed meshes seen from outside,
     /// which changes nothing they store but which of two coplanar faces wins a depth tie; for
     /// measuring)
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub no_cull: bool,
 }
 
+/// `--method`: how the indirect light is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Instant radiosity: virtual point lights (the default)
+    #[default]
+    Instant,
+    /// Progressive refinement: shooting from the element of largest unshot power
+    Progressive,
+    /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991): links refined by B*F
+    Hierarchical,
+    /// Stochastic Jacobi radiosity: rays distribute power, no form factors stored
+    Stochastic,
+}
+
+impl Method {
+    /// The classical solver this method runs (none for instant radiosity).
+    pub fn solver(self) -> Option<crate::radiosity::Solver> {
+        use crate::radiosity::Solver;
+        match self {
+            Method::Instant => None,
+            Method::Progressive => Some(Solver::Progressive),
+            Method::Hierarchical => Some(Solver::Hierarchical),
+            Method::Stochastic => Some(Solver::Stochastic),
+        }
+    }
+    pub fn name(self) -> &'static str {
+        self.solver().map_or("instant", |s| s.name())
+    }
+}
+
 /// `--profiling`: how a frame's GPU passes are submitted and timed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum ProfilingChoice {
     Auto,
@@ -113,7 +148,7 @@ impl Default for Render {
     fn default() -> Self {
         Render {
             sequence: Sequence::default(),
-            method: crate::radiosity::Method::Instant,
+            method: Method::Instant,
             vpls: 256,
             clamp: None,
             sampler: SamplerConfig::default(),
@@ -133,9 +168,9 @@ impl Render {
     /// Checks every setting that does not need the scene or the adapter.
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
-        check::int("--vpls", self.vpls, 1, 65535)?;
+        check::int("`vpls`", self.vpls, 1, 65535)?;
         if let Some(c) = self.clamp {
-            check::float("--clamp", c, 0.0, false, 1e9)?;
+            check::float("`clamp`", c, 0.0, false, 1e9)?;
         }
         self.sampler.validate(self.vpls)?;
         self.quality.validate()?;
@@ -149,18 +184,19 @@ impl Render {
 }
 
 /// `irad reference`: the path-traced ground truth.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Reference {
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub sequence: Sequence,
     /// Samples per pixel
-    #[arg(long, default_value_t = Reference::default().spp, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().spp, allow_hyphen_values = true))]
     pub spp: u32,
     /// Output folder
-    #[arg(long, default_value_os_t = Reference::default().out)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Reference::default().out))]
     pub out: PathBuf,
     /// Exposure of the PNG previews (the EXR files are linear, unscaled)
-    #[arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
 }
 
@@ -183,7 +219,7 @@ impl Default for Reference {
 impl Reference {
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
-        check::int("--spp", self.spp, 1, MAX_SPP)?;
+        check::int("`spp`", self.spp, 1, MAX_SPP)?;
         check_exposure(self.exposure)
     }
 }
@@ -224,15 +260,16 @@ impl Serialize for BenchCase {
 }
 
 /// `irad bench`: time per stage of whole frames for several configurations.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Bench {
-    #[command(flatten)]
+    #[cfg_attr(feature = "cli", command(flatten))]
     pub render: Render,
     /// Configurations VPLS@WxH (each overrides --vpls and --size)
-    #[arg(long = "configs", value_delimiter = ',', default_values_t = Bench::default().cases)]
+    #[cfg_attr(feature = "cli", arg(long = "configs", value_delimiter = ',', default_values_t = Bench::default().cases))]
     pub cases: Vec<BenchCase>,
     /// Frames measured per configuration (after one warm-up frame)
-    #[arg(long, default_value_t = Bench::default().repeat, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Bench::default().repeat, allow_hyphen_values = true))]
     pub repeat: u32,
 }
 
@@ -271,9 +308,9 @@ impl Bench {
     }
     pub fn validate(&self) -> Result<()> {
         if self.cases.is_empty() {
-            bail!("--configs needs at least one VPLS@WxH");
+            bail!("`configs` needs at least one VPLS@WxH");
         }
-        check::int("--repeat", self.repeat, 1, 10_000)?;
+        check::int("`repeat`", self.repeat, 1, 10_000)?;
         for &c in &self.cases {
             self.case(c).validate()?;
         }
@@ -282,15 +319,6 @@ impl Bench {
     /// The scene benchmarked, or the still Cornell box.
     pub fn scene_name(&self) -> &str {
         self.render.sequence.scene_or(DEFAULT_STILL_SCENE)
-    }
-}
-
-impl std::fmt::Display for SamplerKind {
-    /// The name the CLI spells (`uniform`, `cdf`, `mh`, `frozen`, `rejection`).
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        use clap::ValueEnum;
-        let v = self.to_possible_value().expect("no skipped variants");
-        f.write_str(v.get_name())
     }
 }
 
@@ -334,7 +362,7 @@ mod tests {
                 ..Quality::default()
             };
             let e = q.validate().unwrap_err().to_string();
-            assert!(e.contains("--interleave") && e.contains("0 to 8"), "{e}");
+            assert!(e.contains("`interleave`") && e.contains("0 to 8"), "{e}");
         }
         let q = Quality {
             interleave: 8,

@@ -4,7 +4,6 @@
 use super::*;
 use crate::scene::Scene;
 use anyhow::{bail, Result};
-use clap::Args;
 use serde::Serialize;
 
 /// A half-open frame range `A..B`, or a single frame `N`.
@@ -75,9 +74,6 @@ pub struct Size {
     pub width: u32,
     pub height: u32,
 }
-
-/// The largest width or height any command accepts.
-pub const MAX_SIZE: u32 = 8192;
 
 impl std::str::FromStr for Size {
     type Err = String;
@@ -182,21 +178,21 @@ impl CameraSpec {
         let lim = crate::scene::load::MAX_COORD;
         for (what, p) in [("eye", self.eye), ("target", self.target)] {
             if !p.is_finite() {
-                bail!("--camera {self}: the {what} is not a finite point");
+                bail!("`camera` {self}: the {what} is not a finite point");
             }
             if p.abs().max_element() > lim {
-                bail!("--camera {self}: the {what} is farther than {lim:e} from the origin");
+                bail!("`camera` {self}: the {what} is farther than {lim:e} from the origin");
             }
         }
         let d = (self.target - self.eye).length();
         if d <= 1e-6 * self.eye.abs().max_element().max(1.0) {
-            bail!("--camera {self}: the eye and the target are the same point");
+            bail!("`camera` {self}: the eye and the target are the same point");
         }
         let (lo, hi) = crate::scene::load::FOV_RANGE;
         let fov = self.fov_deg;
         if !(fov.is_finite() && fov >= lo.to_degrees() && fov <= hi.to_degrees()) {
             bail!(
-                "--camera {self}: the field of view {fov} degrees is out of range: it must be between 0 and 180 degrees ({:.2} to {:.1})",
+                "`camera` {self}: the field of view {fov} degrees is out of range: it must be between 0 and 180 degrees ({:.2} to {:.1})",
                 lo.to_degrees(),
                 hi.to_degrees()
             );
@@ -209,7 +205,7 @@ impl CameraSpec {
         self.validate()?;
         scene
             .set_camera(self.eye, self.target, self.fov_deg.to_radians())
-            .map_err(|e| anyhow::anyhow!("--camera {self}: {e}"))
+            .map_err(|e| anyhow::anyhow!("`camera` {self}: {e}"))
     }
 }
 
@@ -223,26 +219,30 @@ pub fn load_scene(spec: &str) -> Result<Scene> {
 }
 
 /// The sequence every rendering command renders: scene, image size, frames, rate and seed.
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Sequence {
     /// A built-in scene name (see `irad scenes`) or a .gltf/.glb path [default: the command's]
     pub scene: Option<String>,
     /// Image size WxH
-    #[arg(long, default_value_t = Sequence::default().size)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Sequence::default().size))]
     pub size: Size,
     /// Frames: A..B (half-open) or a single frame N; frame f is at time f / fps
     /// [default: render and compare: the whole animation (at most 2400 frames); others: 0]
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub frames: Option<Frames>,
     /// Frames per second of the animation
-    #[arg(long, default_value_t = Sequence::default().fps, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Sequence::default().fps, allow_hyphen_values = true))]
     pub fps: f32,
     /// Random seed; the same seed gives the same frames
-    #[arg(long, default_value_t = Sequence::default().seed, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Sequence::default().seed, allow_hyphen_values = true))]
     pub seed: u64,
     /// Camera EYE:TARGET:FOV, e.g. 0,0,3.9:0,0,0:39.3 (points x,y,z in scene units, vertical
     /// field of view in degrees): replaces the scene's camera, animated or not, in every frame
-    #[arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")]
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")
+    )]
     pub camera: Option<CameraSpec>,
 }
 
@@ -264,7 +264,7 @@ impl Default for Sequence {
 
 impl Sequence {
     pub fn validate(&self) -> Result<()> {
-        check::float("--fps", self.fps, 0.0, true, 1000.0)?;
+        check::float("`fps`", self.fps, 0.0, true, 1000.0)?;
         match &self.camera {
             Some(c) => c.validate(),
             None => Ok(()),

@@ -304,7 +304,7 @@ pub(crate) fn all_passes() -> Vec<&'static Pass> {
         &super::interleave::PASS,
         &super::compose::PASS,
         &super::temporal::PASS,
-        &super::resolve::PASS,
+        &super::downsample::PASS,
         &super::hemicube::PASS,
         &super::radiosity::PASS,
     ]
@@ -501,15 +501,15 @@ mod tests {
     /// differently from the shader, and a struct whose field moved.
     #[test]
     fn the_check_catches_drift() {
-        const WGSL: &str = "@group(0) @binding(0) var<uniform> P: Params;
+        const WGSL: &str = "@group(0) @binding(0) var<uniform> P: FrameConstants;
 @group(0) @binding(1) var<storage, read_write> out: array<vec4f>;
 @compute @workgroup_size(1) fn main() { out[0] = vec4f(f32(P.width)); }";
         static SWAPPED: [Binding; 2] = [
             read_write("out", Elem::Plain(16)),
-            uniform("P", &super::super::common::Params::LAYOUT),
+            uniform("P", &super::super::common::FrameConstants::LAYOUT),
         ];
         static READ_ONLY: [Binding; 2] = [
-            uniform("P", &super::super::common::Params::LAYOUT),
+            uniform("P", &super::super::common::FrameConstants::LAYOUT),
             read("out", Elem::Plain(16)),
         ];
         static WRONG_STRUCT: [Binding; 2] = [
@@ -517,7 +517,7 @@ mod tests {
             read_write("out", Elem::Plain(16)),
         ];
         static RIGHT: [Binding; 2] = [
-            uniform("P", &super::super::common::Params::LAYOUT),
+            uniform("P", &super::super::common::FrameConstants::LAYOUT),
             read_write("out", Elem::Plain(16)),
         ];
         let pass = |bindings: &'static [Binding]| -> &'static Pass {

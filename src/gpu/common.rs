@@ -5,17 +5,17 @@ use super::bindings::gpu_struct;
 
 gpu_struct! {
     /// Frame constants, the same uniform buffer for every compute pass.
-    pub(crate) struct Params {
+    pub(crate) struct FrameConstants {
         pub width: u32,
         pub height: u32,
         pub num_vpls: u32,
         pub ism_size: u32,
-        pub points_per_vpl: u32,
+        pub ism_points: u32,
         pub num_points: u32,
         pub num_light_samples: u32,
         pub shadow_size: u32,
         pub far: f32,
-        pub dmin: f32,
+        pub clamp: f32,
         pub exposure: f32,
         pub ism_bias: f32,
         pub cam_pos: [f32; 4],
@@ -68,7 +68,7 @@ gpu_struct! {
 
 gpu_struct! {
     /// A VPL: position, unit normal and weighted flux.
-    pub(crate) struct Vpl {
+    pub(crate) struct GpuVpl {
         pub pos: [f32; 4],
         pub normal: [f32; 4],
         pub flux: [f32; 4],
@@ -78,7 +78,7 @@ gpu_struct! {
 gpu_struct! {
     /// An emitter sample: position, unit normal and `Le / (pdf * count)`, and the window of
     /// its one shadow face when it has one (`shadow::Window`: centre and scale; zeros if not).
-    pub(crate) struct LightSample {
+    pub(crate) struct GpuEmitterSample {
         pub pos: [f32; 4],
         pub normal: [f32; 4],
         pub radiance: [f32; 4],

@@ -2,7 +2,7 @@
 //! then exposure and sRGB into the 8-bit preview.
 
 use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Surface, Tri};
+use super::common::{FrameConstants, Surface, Tri};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -11,7 +11,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("direct", Elem::Plain(16)),
@@ -28,7 +28,7 @@ pub struct Compose {
     pass: PixelPass,
     pub hdr: wgpu::Buffer,
     pub ldr: wgpu::Buffer,
-    /// Supersampled (`aa > 1`): each sub-sample's indirect light, for the resolve (else a
+    /// Supersampled (`aa > 1`): each sub-sample's indirect light, for the downsample (else a
     /// placeholder of 16 bytes).
     pub indirect_ss: wgpu::Buffer,
 }

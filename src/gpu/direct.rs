@@ -4,7 +4,7 @@
 //! `reference::twin::direct`.
 
 use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{LightSample, Params, Surface, Tri};
+use super::common::{FrameConstants, GpuEmitterSample, Surface, Tri};
 use super::{Gpu, PixelPass};
 use crate::scene::{EmitterSample, SampleKind};
 
@@ -15,7 +15,7 @@ pub const KIND_SPOT: f32 = 2.0;
 pub const KIND_DIRECTIONAL: f32 = 3.0;
 pub const KIND_POINT_CONE: f32 = 4.0;
 
-impl LightSample {
+impl GpuEmitterSample {
     /// Position, normal and radiance, with the kind in `pos.w` and its parameters in
     /// `normal.w` and `radiance.w` (a spot's inner and outer cosines, a directional
     /// light's map half-extent, a far point light's frustum half-width), and its shadow
@@ -33,7 +33,7 @@ impl LightSample {
         };
         let window = super::shadow::Window::of(l, shadow_size)
             .map_or([0.0; 4], |w| [w.centre.x, w.centre.y, w.scale.x, w.scale.y]);
-        LightSample {
+        GpuEmitterSample {
             pos: l.position.extend(kind).to_array(),
             normal: l.normal.extend(a).to_array(),
             radiance: l.radiance.extend(b).to_array(),
@@ -48,9 +48,9 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
-            read("lights", Elem::Struct(&LightSample::LAYOUT)),
+            read("lights", Elem::Struct(&GpuEmitterSample::LAYOUT)),
             texture("shadows", wgpu::TextureViewDimension::D2Array),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read_write("direct", Elem::Plain(16)),

@@ -2,7 +2,7 @@
 //! visibility. Its CPU twin, with ray-traced visibility, is `reference::twin::gather`.
 
 use super::bindings::{params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Surface, Tri, Vpl};
+use super::common::{FrameConstants, GpuVpl, Surface, Tri};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -11,9 +11,9 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
-            read("vpls", Elem::Struct(&Vpl::LAYOUT)),
+            read("vpls", Elem::Struct(&GpuVpl::LAYOUT)),
             read("ism", Elem::Plain(4)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read_write("indirect", Elem::Plain(16)),

@@ -7,7 +7,7 @@
 use super::bindings::{gpu_struct, Elem, Group, Pass};
 use super::common::Tri;
 use super::Gpu;
-use crate::scene::culling::{Draw, View};
+use crate::scene::culling::{CullView, Draw};
 use glam::{Mat4, Vec2, Vec3};
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
@@ -127,7 +127,7 @@ impl Pipelines {
     }
 
     /// Draws the triangles of `runs` (vertices `3 start .. 3 end`, or indices if `indexed`)
-    /// as each says ([`crate::scene::culling::View::runs`]): `Front` runs skipping the faces
+    /// as each says ([`crate::scene::culling::CullView::runs`]): `Front` runs skipping the faces
     /// `skip` names, `All` runs every face.
     pub(crate) fn draw(
         &self,
@@ -167,11 +167,11 @@ pub(crate) fn skipped_faces(r: Vec3, u: Vec3, f: Vec3) -> wgpu::Face {
     }
 }
 
-/// The G-buffer camera's [`skipped_faces`] and [`View`] on a `width x height` image: the
+/// The G-buffer camera's [`skipped_faces`] and [`CullView`] on a `width x height` image: the
 /// near plane (clip `z >= 0`) and the four side planes (`|x|, |y| <= w`), widened by a pixel
 /// on each side (twice the half pixel a sub-sample tile's jitter moves them) so that every
 /// tile's frustum lies inside.
-pub(crate) fn camera_view(view_proj: Mat4, width: u32, height: u32) -> (wgpu::Face, View) {
+pub(crate) fn camera_view(view_proj: Mat4, width: u32, height: u32) -> (wgpu::Face, CullView) {
     let row = |i: usize| view_proj.row(i);
     let plane = |v: glam::Vec4| (v.truncate(), v.w);
     let skip = skipped_faces(row(0).truncate(), row(1).truncate(), row(3).truncate());
@@ -184,7 +184,7 @@ pub(crate) fn camera_view(view_proj: Mat4, width: u32, height: u32) -> (wgpu::Fa
     ];
     (
         skip,
-        View {
+        CullView {
             near: plane(row(2)),
             sides,
         },
@@ -291,7 +291,7 @@ impl GBuffer {
         }
     }
 
-    /// Draws the triangles of `runs` (see [`View::runs`]) seen by `view_proj`, culling the
+    /// Draws the triangles of `runs` (see [`CullView::runs`]) seen by `view_proj`, culling the
     /// faces `skip` names in the `Front` runs (both from [`camera_view`]).
     pub fn encode(
         &self,

@@ -6,7 +6,7 @@
 //! every pixel's filtered value is an unbiased estimate of the full gather.
 
 use super::bindings::{bytes, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Surface, Tri};
+use super::common::{FrameConstants, Surface, Tri};
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
@@ -15,7 +15,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("subsets", Elem::Plain(16)),

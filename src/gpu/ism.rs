@@ -2,14 +2,14 @@
 //!
 //! The point set: points on the surfaces in proportion to area, kept as (triangle,
 //! barycentrics) so they follow moving geometry, in random order. VPL slot s splats the
-//! `points_per_vpl` points starting at its own random offset, so each slot has its own random
+//! `ism_points` points starting at its own random offset, so each slot has its own random
 //! subset, and a slot that keeps its VPL keeps its subset (and its tile, while the geometry is
 //! still: only the slots the renderer lists are redrawn). Each splat writes the nearest depth
 //! into the slot's paraboloid tile of one atlas (a storage buffer, atomicMax on an inverted
 //! depth); pull-push then fills holes within each tile up to `2^levels` texels wide.
 
 use super::bindings::{bytes, gpu_struct, params, read, read_write, Elem, Group, Pass};
-use super::common::{Params, Tri, Vpl};
+use super::common::{FrameConstants, GpuVpl, Tri};
 use super::{dispatch, groups_1d, Gpu};
 
 pub use crate::vpl::ism_points::{
@@ -41,10 +41,10 @@ pub(crate) const SPLAT: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             read("points", Elem::Struct(&Point::LAYOUT)),
-            read("vpls", Elem::Struct(&Vpl::LAYOUT)),
+            read("vpls", Elem::Struct(&GpuVpl::LAYOUT)),
             read("slots", Elem::Plain(8)),
             read_write("atlas", Elem::Plain(4)),
             read_write("near", Elem::Plain(4)),
@@ -59,7 +59,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
         Group {
             stages: wgpu::ShaderStages::COMPUTE,
             bindings: &[
-                params("P", &Params::LAYOUT),
+                params("P", &FrameConstants::LAYOUT),
                 read_write("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
                 read("slots", Elem::Plain(8)),
@@ -92,14 +92,15 @@ pub struct Ism {
     pub pyramid: wgpu::Buffer,
     size: u32,
     levels: u32,
-    max_vpls: u32,
+    /// Tiles in the atlas: one a VPL slot.
+    tiles: u32,
     /// Tiles may hold an unfinished frame's splats: the next splat first clears them all.
     unclean: bool,
 }
 
-/// Bytes of the atlas for `max_vpls` tiles of `size`^2.
-pub fn atlas_bytes(max_vpls: u32, size: u32) -> u64 {
-    bytes::<u32>(max_vpls as u64 * size as u64 * size as u64)
+/// Bytes of the atlas for `slots` tiles of `size`^2.
+pub fn atlas_bytes(slots: u32, size: u32) -> u64 {
+    bytes::<u32>(slots as u64 * size as u64 * size as u64)
 }
 
 impl Ism {
@@ -111,14 +112,14 @@ impl Ism {
         points: &wgpu::Buffer,
         vpls: &wgpu::Buffer,
         slots: &wgpu::Buffer,
-        max_vpls: u32,
+        tiles: u32,
         size: u32,
         levels: u32,
     ) -> Self {
-        // The renderer's grid (Params::near_grid), from the levels asked for.
+        // The renderer's grid (FrameConstants::near_grid), from the levels asked for.
         let cells = near_grid(size, levels) as u64;
         let levels = pull_levels_run(size, levels);
-        let tile = |l: u32| max_vpls as u64 * ((size >> l) as u64).pow(2);
+        let tile = |l: u32| tiles as u64 * ((size >> l) as u64).pow(2);
         let offsets_l: Vec<u64> = (0..=levels + 1)
             .scan(0u64, |acc, l| {
                 let o = *acc;
@@ -129,10 +130,10 @@ impl Ism {
         let rw = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_DST
             | wgpu::BufferUsages::COPY_SRC;
-        let atlas = gpu.buffer("ism atlas", atlas_bytes(max_vpls, size), rw);
+        let atlas = gpu.buffer("ism atlas", atlas_bytes(tiles, size), rw);
         let near = gpu.buffer(
             "ism near-field cells",
-            bytes::<u32>(max_vpls as u64 * cells * cells),
+            bytes::<u32>(tiles as u64 * cells * cells),
             rw,
         );
         let pyramid = gpu.buffer(
@@ -220,7 +221,7 @@ impl Ism {
             pyramid,
             size,
             levels,
-            max_vpls,
+            tiles,
             unclean: false,
         }
     }
@@ -230,7 +231,7 @@ impl Ism {
         if self.levels == 0 {
             0
         } else {
-            self.max_vpls * self.size * self.size
+            self.tiles * self.size * self.size
         }
     }
 
@@ -249,7 +250,7 @@ impl Ism {
         changed: u32,
         points_per_slot: u32,
     ) {
-        debug_assert!(changed <= self.max_vpls);
+        debug_assert!(changed <= self.tiles);
         if changed == 0 {
             return;
         }
@@ -441,7 +442,7 @@ mod tests {
                 })
                 .collect();
             let changed: Vec<[u32; 2]> = (0..slots).rev().step_by(2).map(|s| [s, 0]).collect();
-            let params = Params {
+            let params = FrameConstants {
                 ism_size: size,
                 pull_levels: levels,
                 num_changed: changed.len() as u32,
@@ -458,7 +459,7 @@ mod tests {
             let empty = buffer("unused", &[0u8; 1024]);
             let s = buffer("slots", bytemuck::cast_slice(&changed));
             let ism = Ism::new(&gpu, &p, &empty, &empty, &empty, &s, slots, size, levels);
-            let params = Params {
+            let params = FrameConstants {
                 ism_level1: ism.level1(),
                 ..params
             };

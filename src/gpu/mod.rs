@@ -6,15 +6,16 @@ pub(crate) mod bindings;
 mod common;
 pub mod compose;
 pub mod direct;
+pub mod downsample;
 pub mod gather;
 pub mod gbuffer;
 pub mod hemicube;
 pub mod interleave;
 pub mod ism;
 pub mod profile;
+mod quality;
 pub mod radiosity;
 pub mod renderer;
-pub mod resolve;
 pub mod shadow;
 pub mod surface;
 pub mod temporal;
@@ -23,13 +24,15 @@ use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
 pub use profile::Profiling;
+pub use quality::{Quality, MAX_SIZE};
 pub use renderer::{graph, GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.
 pub const COMMON_WGSL: &str = include_str!("../../shaders/common.wgsl");
 
 /// Which backend to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum BackendChoice {
     /// Vulkan, Metal or DX12 if present, else OpenGL (or WGPU_BACKEND)
     Auto,

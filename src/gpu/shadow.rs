@@ -10,7 +10,7 @@ use super::bindings::{dynamic_uniform, gpu_struct, Elem, Group, Pass};
 use super::common::Tri;
 use super::gbuffer::{self, skipped_faces};
 use super::Gpu;
-use crate::scene::culling::{Instance, View};
+use crate::scene::culling::{CullView, Instance};
 use crate::scene::{EmitterSample, SampleKind};
 use glam::Vec3;
 
@@ -158,11 +158,11 @@ impl Window {
 /// The view of the face with axes `(r, u, f)` at `eye`: in front of its near plane
 /// (`f.(p - eye) >= near`) and, unless it is orthographic, inside its four sides
 /// (`|r.q|, |u.q| <= f.q` for `q = p - eye`, a thousandth wider).
-pub fn face_view((r, u, f): (Vec3, Vec3, Vec3), eye: Vec3, near: f32, ortho: bool) -> View {
+pub fn face_view((r, u, f): (Vec3, Vec3, Vec3), eye: Vec3, near: f32, ortho: bool) -> CullView {
     let plane = |n: Vec3| (n, -n.dot(eye));
     let (pn, pd) = plane(f);
     let f = f * 1.001;
-    View {
+    CullView {
         near: (pn, pd - near),
         sides: if ortho {
             Vec::new()
@@ -391,7 +391,7 @@ impl ShadowMaps {
     /// Renders the shadow maps of `samples` (the faces [`drawn_faces`] gives, face `k` of
     /// sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
     /// unless they are the ones last drawn and the geometry did not move. Each face leaves out
-    /// what [`View::runs`] says of the `instances` (if `cull`; else it draws everything).
+    /// what [`CullView::runs`] says of the `instances` (if `cull`; else it draws everything).
     /// Returns whether it drew.
     #[allow(clippy::too_many_arguments)]
     pub fn encode(

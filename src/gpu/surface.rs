@@ -3,11 +3,11 @@
 //! corners' UVs and colours, and the material's textures sampled by the rule of
 //! `scene::texture` (its CPU twin is `Frame::base_color_at` and `Frame::emission_at`). The
 //! passes that apply albedo or emission (`direct`, `gather`, `interleave`, `compose`) read
-//! it when `Params::textured` is set, else the triangle's factors. Scenes without textures or
+//! it when `FrameConstants::textured` is set, else the triangle's factors. Scenes without textures or
 //! colours skip it.
 
 use super::bindings::{bytes, gpu_struct, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Surface, Tri};
+use super::common::{FrameConstants, Surface, Tri};
 use super::{Gpu, PixelPass};
 use crate::scene::{Frame, TexRef};
 use anyhow::{bail, Result};
@@ -61,7 +61,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),
             read("attrs", Elem::Struct(&TriAttr::LAYOUT)),

@@ -10,7 +10,7 @@
 //! per parity.
 
 use super::bindings::{bytes, gpu_struct, params, read, read_write, texture, Elem, Group, Pass};
-use super::common::{Params, Tri};
+use super::common::{FrameConstants, Tri};
 use super::{Gpu, PixelPass};
 use glam::{Mat4, Vec2};
 
@@ -39,7 +39,7 @@ pub(crate) const PASS: Pass = Pass {
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             params("H", &History::LAYOUT),
             read("tris", Elem::Struct(&Tri::LAYOUT)),
             texture("gbuf", wgpu::TextureViewDimension::D2),

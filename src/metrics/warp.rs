@@ -318,7 +318,7 @@ pub fn for_scene(
     test: &[Hdr],
     reference: &[Hdr],
 ) -> Result<WarpedFlicker> {
-    crate::check::float("--fps", fps, 0.0, true, 1000.0)?;
+    crate::check::float("`fps`", fps, 0.0, true, 1000.0)?;
     if numbers.windows(2).any(|w| w[1] != w[0] + 1) {
         bail!("warped flicker needs consecutive frame numbers");
     }

@@ -66,7 +66,7 @@ pub fn direct_at(tracer: &Tracer, lights: &[EmitterSample], x: Vec3, n: Vec3, rh
 
 /// Image size and sampling of [`render_cpu`].
 #[derive(Clone, Copy, Debug)]
-pub struct View {
+pub struct DisplayView {
     pub width: u32,
     pub height: u32,
     /// Jittered camera rays per pixel; 0: one ray through each pixel's centre (what the
@@ -80,8 +80,8 @@ pub struct View {
 /// The camera's image of a solution: `spp` jittered rays per pixel (box filter, like the
 /// reference), emission on front faces, the interpolated radiance, and with
 /// [`Part::Indirect`] direct light from `light_samples` emitter samples traced in `scene`.
-pub fn render_cpu(frame: &Frame, scene: &Tracer, shaded: &Shaded, v: &View) -> Hdr {
-    let View {
+pub fn render_cpu(frame: &Frame, scene: &Tracer, shaded: &Shaded, v: &DisplayView) -> Hdr {
+    let DisplayView {
         width,
         height,
         spp,

@@ -86,10 +86,10 @@ pub fn point_to_polygon(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
     (sum.abs() / (2.0 * PI)).min(1.0)
 }
 
-/// Quality of an element-to-element estimate: receiver sample points and visibility rays
+/// FormFactorAccuracy of an element-to-element estimate: receiver sample points and visibility rays
 /// per point.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Quality {
+pub struct FormFactorAccuracy {
     pub points: usize,
     pub rays: usize,
 }
@@ -97,7 +97,13 @@ pub struct Quality {
 /// Form factor F(i -> j): the fraction of the energy leaving element `i` that reaches the
 /// front of element `j`, with visibility through `tracer` (`None`: unoccluded). Returns 0
 /// when they do not face each other.
-pub fn element(mesh: &Mesh, tracer: Option<&Tracer>, i: usize, j: usize, q: Quality) -> f32 {
+pub fn element(
+    mesh: &Mesh,
+    tracer: Option<&Tracer>,
+    i: usize,
+    j: usize,
+    q: FormFactorAccuracy,
+) -> f32 {
     if i == j {
         return 0.0;
     }
@@ -121,7 +127,7 @@ pub fn between(
     cj: &[Vec3; 3],
     nj: Vec3,
     tracer: Option<&Tracer>,
-    q: Quality,
+    q: FormFactorAccuracy,
 ) -> (f32, u32) {
     if !facing(ci, ni, cj, nj) {
         return (0.0, 0);
@@ -317,7 +323,7 @@ pub(crate) mod tests {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
         let m = Mesh::uniform(&f, 0.8, 10_000);
-        let q = Quality { points: 7, rays: 4 };
+        let q = FormFactorAccuracy { points: 7, rays: 4 };
         let n = m.len();
         let ff: Vec<Vec<f32>> = (0..n)
             .map(|i| (0..n).map(|j| element(&m, Some(&tr), i, j, q)).collect())

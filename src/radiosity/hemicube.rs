@@ -54,7 +54,7 @@ pub fn row(hc: &Hemicube, gpu: &Gpu, mesh: &Mesh, i: usize) -> Result<Vec<f32>> 
 mod tests {
     use super::*;
     use crate::gpu::BackendChoice;
-    use crate::radiosity::form_factor::{self, point_to_polygon, Quality};
+    use crate::radiosity::form_factor::{self, point_to_polygon, FormFactorAccuracy};
     use crate::scene::builtin;
     use crate::trace::Tracer;
 
@@ -247,7 +247,7 @@ mod tests {
         let tr = Tracer::new(&f);
         let m = Mesh::uniform(&f, 0.15, 6000);
         let n = m.len();
-        let q = Quality { points: 1, rays: 7 };
+        let q = FormFactorAccuracy { points: 1, rays: 7 };
         let picks: Vec<usize> = (0..12).map(|k| k * n / 12 + 7).collect();
         let rays: Vec<Vec<f32>> = picks
             .iter()

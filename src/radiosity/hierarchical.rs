@@ -12,9 +12,9 @@
 //! source term of every leaf beside its emission (computed at each node once links are built,
 //! as in [`super::punctual_irradiance`]); light it sends along links is indirect.
 
-use super::form_factor::{self, point_to_polygon, Quality};
+use super::form_factor::{self, point_to_polygon, FormFactorAccuracy};
 use super::mesh::Mesh;
-use super::{ambient, punctual_irradiance, Settings, Solution, Stats};
+use super::{ambient, punctual_irradiance, RadiositySettings, Solution, Stats};
 use crate::math::luminance;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -23,7 +23,7 @@ use rayon::prelude::*;
 use std::f32::consts::PI;
 
 #[derive(Clone, Debug)]
-pub struct Params {
+pub struct HierarchicalSettings {
     /// Top-level patch size (longest edge).
     pub top_size: f32,
     /// Nodes whose longest edge is under this do not split.
@@ -32,17 +32,17 @@ pub struct Params {
     pub eps: f32,
     /// Stop Jacobi when no radiance changes by more than this fraction of the emitted mean.
     pub tolerance: f32,
-    pub quality: Quality,
+    pub quality: FormFactorAccuracy,
 }
 
-impl From<&Settings> for Params {
-    fn from(s: &Settings) -> Self {
-        Params {
+impl From<&RadiositySettings> for HierarchicalSettings {
+    fn from(s: &RadiositySettings) -> Self {
+        HierarchicalSettings {
             top_size: s.element_size * 4.0,
             min_size: s.element_size / 4.0,
             eps: 0.5 * s.refine_threshold,
             tolerance: s.tolerance,
-            quality: Quality { points: 4, rays: 4 },
+            quality: FormFactorAccuracy { points: 4, rays: 4 },
         }
     }
 }
@@ -272,7 +272,7 @@ impl Tree {
     }
 }
 
-pub fn solve(frame: &Frame, tracer: &Tracer, p: &Params) -> Solution {
+pub fn solve(frame: &Frame, tracer: &Tracer, p: &HierarchicalSettings) -> Solution {
     let start = std::time::Instant::now();
     let top = Mesh::uniform(frame, p.top_size, usize::MAX);
     let mut tree = Tree { nodes: Vec::new() };
@@ -396,12 +396,12 @@ mod tests {
     fn white_furnace_is_two() {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
-        let p = Params {
+        let p = HierarchicalSettings {
             top_size: 1.0,
             min_size: 0.2,
             eps: 0.01,
             tolerance: 1e-4,
-            quality: Quality { points: 7, rays: 4 },
+            quality: FormFactorAccuracy { points: 7, rays: 4 },
         };
         let sol = solve(&f, &tr, &p);
         assert!(sol.stats.links > 0 && !sol.mesh.is_empty());

@@ -23,14 +23,13 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::f32::consts::PI;
 
-/// A global-illumination method: instant radiosity (VPLs) or a classical solver.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum, Default)]
+/// A classical radiosity solver: what `--method progressive|hierarchical|stochastic` runs
+/// (`instant`, the VPLs, is the renderer's own: `config::Method`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Default)]
 #[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Instant radiosity: virtual point lights (the default)
-    #[default]
-    Instant,
+pub enum Solver {
     /// Progressive refinement: shooting from the element of largest unshot power
+    #[default]
     Progressive,
     /// Hierarchical radiosity (Hanrahan, Salzman, Aupperle 1991): links refined by B*F
     Hierarchical,
@@ -38,13 +37,12 @@ pub enum Method {
     Stochastic,
 }
 
-impl Method {
+impl Solver {
     pub fn name(self) -> &'static str {
         match self {
-            Method::Instant => "instant",
-            Method::Progressive => "progressive",
-            Method::Hierarchical => "hierarchical",
-            Method::Stochastic => "stochastic",
+            Solver::Progressive => "progressive",
+            Solver::Hierarchical => "hierarchical",
+            Solver::Stochastic => "stochastic",
         }
     }
 }
@@ -220,10 +218,10 @@ pub(crate) fn ambient(mesh: &Mesh, rho: &[Vec3], unshot: &[Vec3]) -> Vec<Vec3> {
     rho.iter().map(|&r| r * amb).collect()
 }
 
-/// Settings shared by the solvers.
+/// The settings shared by the solvers.
 #[derive(Clone, Debug, Serialize)]
-pub struct Settings {
-    pub method: Method,
+pub struct RadiositySettings {
+    pub solver: Solver,
     /// Initial element size (longest edge), in scene units.
     pub element_size: f32,
     /// Most elements the mesh may hold (adaptive refinement stops there).
@@ -239,10 +237,10 @@ pub struct Settings {
     pub seed: u64,
 }
 
-impl Default for Settings {
+impl Default for RadiositySettings {
     fn default() -> Self {
-        Settings {
-            method: Method::Progressive,
+        RadiositySettings {
+            solver: Solver::Progressive,
             element_size: 0.15,
             max_elements: 6000,
             refine_rounds: 2,
@@ -255,31 +253,29 @@ impl Default for Settings {
 }
 
 /// Solves the frame with a classical method: mesh, solve, and adaptive refinement rounds
-/// (split where neighbours differ, solve again). `Method::Instant` has no solution: it gives
-/// an empty one.
-pub fn solve(frame: &Frame, tracer: &Tracer, s: &Settings) -> Solution {
+/// (split where neighbours differ, solve again).
+pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution {
     let start = std::time::Instant::now();
     let mut mesh = Mesh::uniform(frame, s.element_size, s.max_elements);
     let mut rounds = 0;
     let mut stats_rays = 0;
     let mut sol = loop {
-        let sol = match s.method {
-            Method::Instant => Solution::default(),
-            Method::Progressive => {
+        let sol = match s.solver {
+            Solver::Progressive => {
                 progressive::solve(frame, tracer, mesh.clone(), &progressive_params(s))
             }
-            Method::Hierarchical => {
-                hierarchical::solve(frame, tracer, &hierarchical::Params::from(s))
+            Solver::Hierarchical => {
+                hierarchical::solve(frame, tracer, &hierarchical::HierarchicalSettings::from(s))
             }
-            Method::Stochastic => {
-                stochastic::solve(frame, tracer, mesh.clone(), &stochastic::Params::from(s))
-            }
+            Solver::Stochastic => stochastic::solve(
+                frame,
+                tracer,
+                mesh.clone(),
+                &stochastic::StochasticSettings::from(s),
+            ),
         };
         stats_rays += sol.stats.rays;
-        if rounds >= s.refine_rounds
-            || s.method == Method::Instant
-            || s.method == Method::Hierarchical
-        {
+        if rounds >= s.refine_rounds || s.solver == Solver::Hierarchical {
             break sol;
         }
         let v = sol.display_values(Part::Reflected);
@@ -318,7 +314,12 @@ pub struct Cache {
 impl Cache {
     /// The solution for `frame`, solving only if its triangles, materials or punctual lights
     /// changed since the last call. Returns it and whether it was solved now.
-    pub fn get(&mut self, frame: &Frame, tracer: &Tracer, s: &Settings) -> (&Solution, bool) {
+    pub fn get(
+        &mut self,
+        frame: &Frame,
+        tracer: &Tracer,
+        s: &RadiositySettings,
+    ) -> (&Solution, bool) {
         let lights = &frame.emitters.lights;
         let same = self
             .key
@@ -337,12 +338,12 @@ impl Cache {
     }
 }
 
-fn progressive_params(s: &Settings) -> progressive::Params {
-    progressive::Params {
+fn progressive_params(s: &RadiositySettings) -> progressive::ProgressiveSettings {
+    progressive::ProgressiveSettings {
         tolerance: s.tolerance,
         max_shots: usize::MAX,
-        bright: form_factor::Quality { points: 4, rays: 7 },
-        dim: form_factor::Quality { points: 1, rays: 4 },
+        bright: form_factor::FormFactorAccuracy { points: 4, rays: 7 },
+        dim: form_factor::FormFactorAccuracy { points: 1, rays: 4 },
     }
 }
 
@@ -353,11 +354,11 @@ mod tests {
 
     #[test]
     fn cache_solves_again_only_when_geometry_or_lights_move() {
-        let s = Settings {
+        let s = RadiositySettings {
             element_size: 0.6,
             refine_rounds: 0,
             tolerance: 0.05,
-            ..Settings::default()
+            ..RadiositySettings::default()
         };
         let orbit = builtin::load("cornell-orbit").unwrap().unwrap();
         let mut cache = Cache::default();
@@ -442,17 +443,17 @@ mod tests {
         // measured is near zero (the direct part's 3-point rule per element, the stochastic
         // seed).
         for (method, tol_d, tol_i) in [
-            (Method::Progressive, 0.02, 0.02),
-            (Method::Hierarchical, 0.02, 0.058),
-            (Method::Stochastic, 0.02, 0.02),
+            (Solver::Progressive, 0.02, 0.02),
+            (Solver::Hierarchical, 0.02, 0.058),
+            (Solver::Stochastic, 0.02, 0.02),
         ] {
-            let s = Settings {
-                method,
+            let s = RadiositySettings {
+                solver: method,
                 element_size: 0.4,
                 refine_rounds: 0,
                 tolerance: 1e-3,
                 rays: 200_000,
-                ..Settings::default()
+                ..RadiositySettings::default()
             };
             let sol = solve(&f, &tr, &s);
             let direct = sol.power(&sol.direct);
@@ -488,11 +489,11 @@ mod tests {
         let i = Vec3::new(1.0, 0.5, 0.25);
         let f = furnace_lit_by_light(kind, Vec3::new(0.3, 0.5, -0.2), Vec3::NEG_Y, i);
         let tr = Tracer::new(&f);
-        let s = Settings {
+        let s = RadiositySettings {
             element_size: 0.4,
             refine_rounds: 0,
             tolerance: 1e-3,
-            ..Settings::default()
+            ..RadiositySettings::default()
         };
         let sol = solve(&f, &tr, &s);
         let expect = i * kind.solid_angle() / (2.0 * PI);
@@ -514,15 +515,15 @@ mod tests {
             Vec3::ONE,
         );
         for method in [
-            Method::Progressive,
-            Method::Hierarchical,
-            Method::Stochastic,
+            Solver::Progressive,
+            Solver::Hierarchical,
+            Solver::Stochastic,
         ] {
             let sol = solve(
                 &sun,
                 &tr,
-                &Settings {
-                    method,
+                &RadiositySettings {
+                    solver: method,
                     rays: 10_000,
                     ..s.clone()
                 },
@@ -548,16 +549,16 @@ mod tests {
         let mut f = builtin::load("cornell").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
         for method in [
-            Method::Progressive,
-            Method::Hierarchical,
-            Method::Stochastic,
+            Solver::Progressive,
+            Solver::Hierarchical,
+            Solver::Stochastic,
         ] {
-            let s = Settings {
-                method,
+            let s = RadiositySettings {
+                solver: method,
                 element_size: 0.6,
                 refine_rounds: 1,
                 rays: 10_000,
-                ..Settings::default()
+                ..RadiositySettings::default()
             };
             // No emission: everything black, finite.
             let mut dark = f.clone();

@@ -8,7 +8,7 @@
 //! is left. The punctual lights' direct light (no element emits it) starts as reflected
 //! unshot radiance: its first shot is already indirect light.
 
-use super::form_factor::{self, Quality};
+use super::form_factor::{self, FormFactorAccuracy};
 use super::mesh::Mesh;
 use super::{ambient, element_materials, punctual_direct, Solution, Stats};
 use crate::math::luminance;
@@ -18,18 +18,18 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
-pub struct Params {
+pub struct ProgressiveSettings {
     /// Stop when the unshot power is under this fraction of the source power (emitted plus
     /// the punctual lights' direct light).
     pub tolerance: f32,
     pub max_shots: usize,
     /// Form-factor quality for shots carrying at least 1% of the emitted power.
-    pub bright: Quality,
+    pub bright: FormFactorAccuracy,
     /// ... and for the dimmer shots that follow.
-    pub dim: Quality,
+    pub dim: FormFactorAccuracy,
 }
 
-pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &Params) -> Solution {
+pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &ProgressiveSettings) -> Solution {
     let start = std::time::Instant::now();
     let n = mesh.len();
     let (le, rho) = element_materials(frame, &mesh);
@@ -150,8 +150,8 @@ mod tests {
         let tr = Tracer::new(&f);
         let mesh = Mesh::uniform(&f, 0.7, 10_000);
         let n = mesh.len();
-        let q = Quality { points: 3, rays: 4 };
-        let p = Params {
+        let q = FormFactorAccuracy { points: 3, rays: 4 };
+        let p = ProgressiveSettings {
             tolerance: 1e-7,
             max_shots: 100_000,
             bright: q,
@@ -196,11 +196,11 @@ mod tests {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
         let mesh = Mesh::uniform(&f, 0.5, 10_000);
-        let p = Params {
+        let p = ProgressiveSettings {
             tolerance: 1e-3,
             max_shots: 1_000_000,
-            bright: Quality { points: 4, rays: 4 },
-            dim: Quality { points: 4, rays: 4 },
+            bright: FormFactorAccuracy { points: 4, rays: 4 },
+            dim: FormFactorAccuracy { points: 4, rays: 4 },
         };
         let sol = solve(&f, &tr, mesh, &p);
         // With the ambient term the unshot remainder is accounted for.

@@ -9,7 +9,7 @@
 //! radiance beside the emission; what it sends on is indirect light.
 
 use super::mesh::Mesh;
-use super::{ambient, element_materials, punctual_direct, Settings, Solution, Stats};
+use super::{ambient, element_materials, punctual_direct, RadiositySettings, Solution, Stats};
 use crate::math::{cosine_hemisphere, luminance, rng, triangle_barycentrics};
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -18,7 +18,7 @@ use rand::Rng;
 use rayon::prelude::*;
 
 #[derive(Clone, Debug)]
-pub struct Params {
+pub struct StochasticSettings {
     /// Rays per iteration.
     pub rays: usize,
     pub tolerance: f32,
@@ -26,9 +26,9 @@ pub struct Params {
     pub seed: u64,
 }
 
-impl From<&Settings> for Params {
-    fn from(s: &Settings) -> Self {
-        Params {
+impl From<&RadiositySettings> for StochasticSettings {
+    fn from(s: &RadiositySettings) -> Self {
+        StochasticSettings {
             rays: s.rays,
             tolerance: s.tolerance,
             max_iterations: 100,
@@ -42,7 +42,7 @@ impl From<&Settings> for Params {
 const CHUNK: usize = 4096;
 
 /// Solves on `mesh`; `tracer` (the frame's) gives the punctual lights' visibility.
-pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &Params) -> Solution {
+pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &StochasticSettings) -> Solution {
     let start = std::time::Instant::now();
     let n = mesh.len();
     let (le, rho) = element_materials(frame, &mesh);
@@ -156,7 +156,7 @@ mod tests {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
         let mesh = Mesh::uniform(&f, 0.5, 10_000);
-        let p = Params {
+        let p = StochasticSettings {
             rays: 200_000,
             tolerance: 1e-3,
             max_iterations: 100,

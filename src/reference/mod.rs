@@ -21,7 +21,7 @@ const ALL_LIGHTS: usize = 8;
 
 /// Parameters of one reference image.
 #[derive(Clone, Copy, Debug)]
-pub struct Params {
+pub struct ReferenceSettings {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
@@ -30,7 +30,12 @@ pub struct Params {
 
 /// Renders one frame. Each pixel is the box-filtered mean radiance over its
 /// area; `on_row` is called once per finished row (for progress bars).
-pub fn render(frame: &Frame, tracer: &Tracer, s: &Params, on_row: &(dyn Fn() + Sync)) -> Hdr {
+pub fn render(
+    frame: &Frame,
+    tracer: &Tracer,
+    s: &ReferenceSettings,
+    on_row: &(dyn Fn() + Sync),
+) -> Hdr {
     let mut img = Hdr::new(s.width, s.height);
     img.data
         .par_chunks_mut(s.width as usize)
@@ -147,7 +152,7 @@ mod tests {
         let scene = builtin::load("furnace").unwrap().unwrap();
         let f = scene.at(0.0);
         let tr = Tracer::new(&f);
-        let s = Params {
+        let s = ReferenceSettings {
             width: 8,
             height: 8,
             spp: 4096,
@@ -184,7 +189,7 @@ mod tests {
         let scene = builtin::load("cornell").unwrap().unwrap();
         let f = scene.at(0.0);
         let tr = Tracer::new(&f);
-        let s = Params {
+        let s = ReferenceSettings {
             width: 8,
             height: 8,
             spp: 4,
@@ -198,7 +203,7 @@ mod tests {
         };
         let a = render(&f, &tr, &s, &|| {});
         assert_eq!(bits(&a), bits(&render(&f, &tr, &s, &|| {})));
-        let other = render(&f, &tr, &Params { seed: 6, ..s }, &|| {});
+        let other = render(&f, &tr, &ReferenceSettings { seed: 6, ..s }, &|| {});
         let changed = a
             .data
             .iter()

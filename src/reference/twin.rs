@@ -66,7 +66,7 @@ pub fn gather(
     width: u32,
     height: u32,
     vpls: &[ShadedVpl],
-    dmin: f32,
+    clamp: f32,
 ) -> Hdr {
     image(width, height, |i| {
         let Some(s) = points[i] else {
@@ -75,7 +75,7 @@ pub fn gather(
         let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
         vpls.iter()
             .map(|v| {
-                let c = v.radiance_at(s.x, s.n, rho, dmin);
+                let c = v.radiance_at(s.x, s.n, rho, clamp);
                 if c == Vec3::ZERO || tracer.occluded(s.x, s.n, v.position, v.normal) {
                     Vec3::ZERO
                 } else {

@@ -33,7 +33,7 @@ pub enum Draw {
     All,
 }
 
-/// Triangles in `runs` ([`View::runs`]): all of them, and those drawn front faces only.
+/// Triangles in `runs` ([`CullView::runs`]): all of them, and those drawn front faces only.
 pub fn counts(runs: &[(Range<u32>, Draw)]) -> (u64, u64) {
     runs.iter().fold((0, 0), |(all, front), (r, d)| {
         let n = r.len() as u64;
@@ -45,12 +45,12 @@ pub fn counts(runs: &[(Range<u32>, Draw)]) -> (u64, u64) {
 /// view's inside at `n.p + d >= 0`. Orthographic views have no side planes here (nothing is
 /// skipped for lying beside them).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct View {
+pub struct CullView {
     pub near: (Vec3, f32),
     pub sides: Vec<(Vec3, f32)>,
 }
 
-impl View {
+impl CullView {
     /// How an instance's triangles are drawn: skipped if its box lies wholly outside a side
     /// plane or wholly behind the near plane; front faces only if it is closed and wholly in
     /// front of the near plane; else all.
@@ -73,7 +73,7 @@ impl View {
         }
     }
 
-    /// The frame's triangles `0..count` in runs, each drawn as [`View::draw`] says for the
+    /// The frame's triangles `0..count` in runs, each drawn as [`CullView::draw`] says for the
     /// instance it belongs to (triangles of no instance: all), adjacent runs alike merged and
     /// skipped ones left out.
     pub fn runs(&self, instances: &[Instance], count: u32) -> Vec<(Range<u32>, Draw)> {
@@ -280,7 +280,7 @@ mod tests {
             inst(9, 11, 3.0, 4.0, false),
             inst(12, 14, 0.0, 1.0, true),
         ];
-        let view = |near: (Vec3, f32)| View {
+        let view = |near: (Vec3, f32)| CullView {
             near,
             sides: vec![],
         };
@@ -309,7 +309,7 @@ mod tests {
         }
         assert_eq!(view((Vec3::ONE, -8.999)).runs(&all, 16)[1], (5..9, Front));
         // A side plane x <= 2 leaves out the boxes at 3..4.
-        let side = View {
+        let side = CullView {
             near: (Vec3::X, 1.0),
             sides: vec![(-Vec3::X, 2.0)],
         };
@@ -325,7 +325,7 @@ mod tests {
         );
         // A box touching a plane counts as meeting it: drawn whole where it touches the near
         // plane, drawn where it touches a side plane from outside.
-        let touch = View {
+        let touch = CullView {
             near: (Vec3::X, 0.0),
             sides: vec![(-Vec3::X, 3.0)],
         };

@@ -258,7 +258,7 @@ pub struct Frame {
     /// For each triangle, its index in `emitters.tris`, or `u32::MAX`.
     pub emitter_of_tri: Vec<u32>,
     /// The mesh instances, in triangle order: what the raster passes may leave out of a view
-    /// ([`culling::View::runs`]).
+    /// ([`culling::CullView::runs`]).
     pub instances: Vec<culling::Instance>,
 }
 

@@ -63,12 +63,12 @@ pub fn camera_points(
 
 /// `I(v)`: the VPL's clamped, unweighted contribution summed over the camera points, with
 /// visibility (no floor).
-pub fn importance(v: &Vpl, points: &[CameraPoint], tracer: &Tracer, dmin: f32) -> f32 {
+pub fn importance(v: &Vpl, points: &[CameraPoint], tracer: &Tracer, clamp: f32) -> f32 {
     let s = ShadedVpl::new(v, 1.0);
     points
         .iter()
         .map(|p| {
-            let c = s.radiance_at(p.x, p.n, p.albedo, dmin);
+            let c = s.radiance_at(p.x, p.n, p.albedo, clamp);
             if c == Vec3::ZERO || tracer.occluded(p.x, p.n, v.position, v.normal) {
                 0.0
             } else {
@@ -83,9 +83,9 @@ pub fn importance_all(
     vpls: &[Vpl],
     points: &[CameraPoint],
     tracer: &Tracer,
-    dmin: f32,
+    clamp: f32,
 ) -> Vec<f32> {
     vpls.par_iter()
-        .map(|v| importance(v, points, tracer, dmin))
+        .map(|v| importance(v, points, tracer, clamp))
         .collect()
 }

@@ -11,7 +11,7 @@ pub use paths::{trace_path, trace_paths, Vpl};
 
 /// A VPL as the gather sees it: position, normal, and weighted flux
 /// `power * albedo_y * weight` (RGB), so that its outgoing radiance at a receiver x is
-/// `flux * rho_x * cos_x cos_y / (pi^2 max(d^2, dmin^2))`.
+/// `flux * rho_x * cos_x cos_y / (pi^2 max(d^2, clamp^2))`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadedVpl {
     pub position: Vec3,
@@ -30,7 +30,7 @@ impl ShadedVpl {
 
     /// Outgoing radiance at `x` (unit normal `nx` facing the viewer, albedo `rho_x`),
     /// without visibility.
-    pub fn radiance_at(&self, x: Vec3, nx: Vec3, rho_x: Vec3, dmin: f32) -> Vec3 {
+    pub fn radiance_at(&self, x: Vec3, nx: Vec3, rho_x: Vec3, clamp: f32) -> Vec3 {
         let d = self.position - x;
         let d2 = d.length_squared();
         if d2 <= 0.0 {
@@ -42,6 +42,6 @@ impl ShadedVpl {
         if cos_x <= 0.0 || cos_y <= 0.0 {
             return Vec3::ZERO;
         }
-        self.flux * rho_x * (cos_x * cos_y / (std::f32::consts::PI.powi(2) * d2.max(dmin * dmin)))
+        self.flux * rho_x * (cos_x * cos_y / (std::f32::consts::PI.powi(2) * d2.max(clamp * clamp)))
     }
 }

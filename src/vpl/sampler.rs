@@ -36,10 +36,12 @@ mod common;
 pub mod knobs;
 mod mh;
 mod rejection;
+mod settings;
 mod smc;
 mod uniform;
 
 pub use common::{cdf_draw, mh_accept, PATHS_PER_FRAME};
+pub use settings::SamplerConfig;
 pub use smc::spread as smc_spread;
 
 use super::{ShadedVpl, Vpl};
@@ -48,7 +50,8 @@ use crate::trace::Tracer;
 use serde::Serialize;
 
 /// Which sampler picks the frame's VPLs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum SamplerKind {
     /// Keller's instant radiosity: fresh light paths every frame
@@ -68,6 +71,43 @@ pub enum SamplerKind {
     Smc,
 }
 
+impl SamplerKind {
+    /// Every sampler, in the order the help lists them.
+    pub const ALL: [SamplerKind; 6] = [
+        SamplerKind::Uniform,
+        SamplerKind::Cdf,
+        SamplerKind::Mh,
+        SamplerKind::Frozen,
+        SamplerKind::Rejection,
+        SamplerKind::Smc,
+    ];
+
+    /// The name the settings and the CLI spell (`uniform`, `cdf`, `mh`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Uniform => "uniform",
+            SamplerKind::Cdf => "cdf",
+            SamplerKind::Mh => "mh",
+            SamplerKind::Frozen => "frozen",
+            SamplerKind::Rejection => "rejection",
+            SamplerKind::Smc => "smc",
+        }
+    }
+
+    /// The sampler named `name` (any case).
+    pub fn parse(name: &str) -> Option<SamplerKind> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(name))
+    }
+}
+
+impl std::fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The sampler's parameters.
 #[derive(Clone, Debug, Serialize)]
 pub struct SamplerParams {
@@ -78,7 +118,7 @@ pub struct SamplerParams {
     pub candidates: usize,
     /// The knobs (`candidates` above is M resolved from theirs).
     pub knobs: knobs::SamplerKnobs,
-    pub dmin: f32,
+    pub clamp: f32,
     pub seed: u64,
     /// The image the camera points stratify.
     pub width: u32,
@@ -116,7 +156,7 @@ pub struct Selection {
     pub acceptance: Option<f32>,
     /// MH: the probability that a chain proposed this frame (the base rate raised by how far
     /// the target moved); SMC: the probability that a slot renewed (the mean of its halves').
-    pub mh_rate: Option<f32>,
+    pub renewal_rate: Option<f32>,
     /// Mean floored importance over the candidates.
     pub b: Option<f32>,
     /// Seconds spent on camera points, importance (and, for mh, re-tracing the chains'

@@ -220,8 +220,8 @@ fn a_comparison_opens_one_device_for_all_its_runs() {
     ];
     cfg.vpls = vec![4, 8];
     cfg.methods = vec![
-        irad::radiosity::Method::Instant,
-        irad::radiosity::Method::Stochastic,
+        irad::config::Method::Instant,
+        irad::config::Method::Stochastic,
     ];
     cfg.spp = 2;
     cfg.out = out.join("report");
@@ -446,7 +446,7 @@ fn run_json_records_the_budgets_the_scene_chose() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let run: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
-        assert_eq!(run["gpu"]["points_per_vpl"], want, "{vpls} VPLs");
+        assert_eq!(run["gpu"]["ism_points"], want, "{vpls} VPLs");
         assert_eq!(run["gpu"]["interleave"], interleave, "{vpls} VPLs");
         std::fs::remove_dir_all(&out).unwrap();
     }

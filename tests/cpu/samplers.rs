@@ -20,7 +20,7 @@ fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
         kind,
         slots: 32,
         candidates: 128,
-        dmin: DMIN,
+        clamp: DMIN,
         seed,
         width: W,
         height: H,
@@ -282,7 +282,7 @@ fn kept_mh_weights_hold_still_and_the_rate_follows_the_scene() {
     for f in 1..40 {
         let s = mh.select(&frame, &tracer, f);
         assert_eq!(
-            s.mh_rate,
+            s.renewal_rate,
             Some(0.05),
             "frame {f}: nothing moved, the base rate"
         );
@@ -318,7 +318,7 @@ fn kept_mh_weights_hold_still_and_the_rate_follows_the_scene() {
     for f in 0..6 {
         let frame = scene.at(f as f32 / 24.0);
         tracer_for(&frame, |tr| {
-            rates.push(mh.select(&frame, tr, f).mh_rate.unwrap())
+            rates.push(mh.select(&frame, tr, f).renewal_rate.unwrap())
         });
     }
     println!("rates under a moving light: {rates:?}");
@@ -436,7 +436,7 @@ fn smc_keeps_its_particles_bit_for_bit_where_nothing_moves() {
     for f in 1..frames {
         let s = smc.select(&frame, &tracer, f);
         assert_eq!(
-            s.mh_rate,
+            s.renewal_rate,
             Some(0.1),
             "frame {f}: nothing moved, the base rate"
         );
@@ -471,7 +471,7 @@ fn smc_keeps_its_particles_bit_for_bit_where_nothing_moves() {
     let rates: Vec<f32> = (0..6)
         .map(|f| {
             let fr = orbit.at(f as f32 / 4.0);
-            smc.select(&fr, &Tracer::new(&fr), f).mh_rate.unwrap()
+            smc.select(&fr, &Tracer::new(&fr), f).renewal_rate.unwrap()
         })
         .collect();
     println!("smc rates under a moving camera: {rates:?}");

@@ -13,15 +13,15 @@ use irad::trace::Tracer;
 const SIZE: u32 = 64;
 
 /// The still Cornell box at SIZE x SIZE with 1024 VPLs (so the VPLs' own noise is small)
-/// and distance clamp `dmin`, compensated by `rays` rays a pixel (0: not).
-fn render(dmin: f32, rays: u32) -> Hdr {
+/// and distance clamp `clamp`, compensated by `rays` rays a pixel (0: not).
+fn render(clamp: f32, rays: u32) -> Hdr {
     let mut c = config::Render::default();
     c.sequence.size = config::Size {
         width: SIZE,
         height: SIZE,
     };
     c.vpls = 1024;
-    c.clamp = Some(dmin);
+    c.clamp = Some(clamp);
     c.quality.compensate = rays;
     let scene = builtin::load("cornell").unwrap().unwrap();
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(c.backend).unwrap());
@@ -45,20 +45,20 @@ fn bias(img: &Hdr, reference: &Hdr, mask: &[bool]) -> f64 {
 fn compensation_gives_back_the_light_the_clamp_takes_from_corners() {
     // A clamp of 0.2 (3x the default 0.069) makes the bias large enough to measure well
     // above the reference's noise.
-    let dmin = 0.2;
+    let clamp = 0.2;
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let params = irad::reference::Params {
+    let params = irad::reference::ReferenceSettings {
         width: SIZE,
         height: SIZE,
         spp: 2048,
         seed: 5,
     };
     let reference = irad::reference::render(&frame, &tracer, &params, &|| {});
-    let plain = render(dmin, 0);
-    let compensated = render(dmin, 16);
-    // The pixels it changed: where surfaces meet within dmin.
+    let plain = render(clamp, 0);
+    let compensated = render(clamp, 16);
+    // The pixels it changed: where surfaces meet within clamp.
     let mask: Vec<bool> = plain
         .data
         .iter()

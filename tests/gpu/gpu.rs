@@ -36,11 +36,11 @@ fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
     c
 }
 
-/// A uniform-sampler pipeline for a built-in scene with distance clamp `dmin`, on its own
+/// A uniform-sampler pipeline for a built-in scene with distance clamp `clamp`, on its own
 /// device; `cfg.sequence.seed` seeds the sampler too.
-fn pipeline(scene: &str, mut cfg: config::Render, dmin: f32, backend: BackendChoice) -> Pipeline {
+fn pipeline(scene: &str, mut cfg: config::Render, clamp: f32, backend: BackendChoice) -> Pipeline {
     let scene = builtin::load(scene).unwrap().unwrap();
-    cfg.clamp = Some(dmin);
+    cfg.clamp = Some(clamp);
     cfg.backend = backend;
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
     Pipeline::new(gpu, scene, &cfg).unwrap()

@@ -5,11 +5,11 @@
 use crate::common::{self, backends};
 use glam::{Vec2, Vec3};
 use irad::config;
+use irad::config::Method;
 use irad::frame::Pipeline;
 use irad::gpu::BackendChoice;
 use irad::image::Hdr;
 use irad::math::luminance;
-use irad::radiosity::Method;
 use irad::scene::{builtin, camera::Camera, Frame};
 
 /// Where this file's tests write images (`target/tmp/test-output/gpu_aa`).
@@ -210,7 +210,7 @@ fn cornell_mean_luminance_matches_the_path_tracer_with_the_light_in_view() {
     let backend = common::backend();
     let frame = builtin::load("cornell").unwrap().unwrap().at(0.0);
     let tracer = irad::trace::Tracer::new(&frame);
-    let params = irad::reference::Params {
+    let params = irad::reference::ReferenceSettings {
         width: size,
         height: size,
         spp: 64,

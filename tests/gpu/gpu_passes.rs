@@ -249,13 +249,13 @@ fn indirect(
     r: &mut irad::gpu::Renderer,
     frame: &irad::scene::Frame,
     vpls: &[irad::vpl::ShadedVpl],
-    dmin: f32,
+    clamp: f32,
 ) -> irad::image::Hdr {
     let input = irad::gpu::GpuFrame {
         frame,
         vpls,
-        lights: &[],
-        dmin,
+        emitter_samples: &[],
+        clamp,
         near: &[],
     };
     r.render(&input, true).unwrap().indirect.unwrap()
@@ -324,7 +324,7 @@ fn interleaved_gather_is_unbiased_on_flat_regions() {
     let cam = frame.camera.position;
     // A clamp of a sixth of the box: the full gather is smooth over a 4x4 window (the filter
     // estimates the window's mean, which equals the pixel's only where the light is smooth).
-    let dmin = 0.3;
+    let clamp = 0.3;
     let n = 4;
     let mut full_r = interleaved(&gpu, &frame, 1, 64);
     let mut r = interleaved(&gpu, &frame, n, 64);
@@ -344,13 +344,13 @@ fn interleaved_gather_is_unbiased_on_flat_regions() {
     // 1. The weights: over the n^2 equally likely shifts of the pattern, a flat pixel's mean
     // is exactly the window mean of the full gather (each pixel carries each subset once).
     let vpls = random_vpls(&frame, 0);
-    let full = indirect(&mut full_r, &frame, &vpls, dmin);
+    let full = indirect(&mut full_r, &frame, &vpls, clamp);
     let mut mean = full.clone();
     mean.data.fill(glam::Vec3::ZERO);
     for sy in 0..n {
         for sx in 0..n {
             r.interleave_shift = (sx, sy);
-            let h = indirect(&mut r, &frame, &vpls, dmin);
+            let h = indirect(&mut r, &frame, &vpls, clamp);
             for (m, v) in mean.data.iter_mut().zip(&h.data) {
                 *m += *v / (n * n) as f32;
             }
@@ -397,8 +397,8 @@ fn interleaved_gather_is_unbiased_on_flat_regions() {
         let vpls = random_vpls(&frame, s);
         let h = irad::math::mix64(s);
         r.interleave_shift = ((h % n as u64) as u32, ((h >> 32) % n as u64) as u32);
-        let g = indirect(&mut full_r, &frame, &vpls, dmin);
-        let f = indirect(&mut r, &frame, &vpls, dmin);
+        let g = indirect(&mut full_r, &frame, &vpls, clamp);
+        let f = indirect(&mut r, &frame, &vpls, clamp);
         region.push(
             flat.iter()
                 .map(|&i| (f.data[i].y - g.data[i].y) as f64)

@@ -599,7 +599,7 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
     let reference = irad::reference::render(
         &r.frame,
         &r.tracer,
-        &reference::Params {
+        &reference::ReferenceSettings {
             width: SIZE,
             height: SIZE,
             spp: 1024,

@@ -5,7 +5,7 @@ use crate::common::{self, backends};
 use irad::gpu::radiosity::RadiosityPass;
 use irad::gpu::Gpu;
 use irad::metrics::frame_error;
-use irad::radiosity::{self, display, Method, Part, Settings};
+use irad::radiosity::{self, display, Part, RadiositySettings, Solver};
 use irad::scene::builtin;
 use irad::trace::Tracer;
 
@@ -16,12 +16,12 @@ fn gpu_display_matches_the_cpu_twin() {
     let sol = radiosity::solve(
         &f,
         &tr,
-        &Settings {
-            method: Method::Progressive,
+        &RadiositySettings {
+            solver: Solver::Progressive,
             element_size: 0.3,
             refine_rounds: 0,
             tolerance: 0.02,
-            ..Settings::default()
+            ..RadiositySettings::default()
         },
     );
     let shaded = display::Shaded::new(&f, &sol, Part::Reflected);
@@ -30,7 +30,7 @@ fn gpu_display_matches_the_cpu_twin() {
         &f,
         &tr,
         &shaded,
-        &display::View {
+        &display::DisplayView {
             width: w,
             height: h,
             spp: 0,

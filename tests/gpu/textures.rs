@@ -667,7 +667,7 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
     let reference = irad::reference::render(
         &frame,
         &tracer,
-        &irad::reference::Params {
+        &irad::reference::ReferenceSettings {
             width: w,
             height: h,
             spp: 1024,

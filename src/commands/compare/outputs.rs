@@ -3,9 +3,9 @@
 
 use super::plan::Plan;
 use super::runs::{Results, RunRecord};
+use crate::config::Method;
 use crate::image::{write_bytes, Hdr};
 use crate::metrics::floor::Floor;
-use crate::radiosity::Method;
 use crate::report::charts::{self, Chart, Guide, Kind, Series, Shape};
 use crate::report::html;
 use anyhow::{Context, Result};

@@ -1,9 +1,9 @@
 //! What a comparison will do, checked before anything renders: the scene, the frames, and
 //! every run's settings (against the adapter too), on the one device all runs share.
 
+use crate::config::Method;
 use crate::config::{self, Knob};
 use crate::gpu::Gpu;
-use crate::radiosity::Method;
 use crate::scene::Scene;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
@@ -66,7 +66,7 @@ impl Plan {
                         &crate::resolve::bounds(&r, triangles),
                         &gpu.limits,
                     )
-                    .map_err(|e| anyhow::anyhow!("--sweep {sw}: {e}"))?;
+                    .map_err(|e| anyhow::anyhow!("`sweep` {sw}: {e}"))?;
                 }
             }
         }

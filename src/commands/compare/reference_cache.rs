@@ -22,7 +22,7 @@ pub fn half_seed(seed: u64, h: usize) -> u64 {
 }
 
 /// The reference, its two halves and their samples per pixel.
-pub struct Reference {
+pub struct CachedReference {
     /// The spp-weighted mean of the halves, frame by frame.
     pub frames: Vec<Hdr>,
     pub halves: [Vec<Hdr>; 2],
@@ -112,7 +112,7 @@ pub fn mean_of_halves(a: &Hdr, b: &Hdr, spp: [u32; 2]) -> Hdr {
 
 /// The reference frames of the plan and their halves, from the cache where present, else
 /// traced and cached.
-pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Reference> {
+pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<CachedReference> {
     let spp = halves(plan.cfg.spp);
     let a = half(plan, 0, spp[0], tick)?;
     let b = half(plan, 1, spp[1], tick)?;
@@ -121,7 +121,7 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<Reference
         .zip(&b)
         .map(|(x, y)| mean_of_halves(x, y, spp))
         .collect();
-    Ok(Reference {
+    Ok(CachedReference {
         frames,
         halves: [a, b],
         spp,

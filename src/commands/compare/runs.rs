@@ -2,12 +2,12 @@
 //! against the reference.
 
 use super::plan::{label, Plan, RunSpec};
+use crate::config::Method;
 use crate::config::{self, Knob};
 use crate::frame::Pipeline;
 use crate::image::Hdr;
 use crate::metrics::warp::{flicker_maps, summarize, WarpedFlicker};
 use crate::metrics::{self, SequenceMetrics};
-use crate::radiosity::Method;
 use crate::vpl::sampler::SamplerKind;
 use anyhow::Result;
 use serde::Serialize;

@@ -2,11 +2,11 @@
 //! its passes share, the passes of the graph, and the read-back buffers.
 
 use super::super::bindings::bytes;
-use super::super::common::{LightSample, Params, Tri, Vpl};
+use super::super::common::{FrameConstants, GpuEmitterSample, GpuVpl, Tri};
 use super::super::gbuffer::Vertex;
 use super::super::{
-    check_size, compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer,
-    interleave::Interleave, ism, resolve::Resolve, shadow::ShadowMaps, temporal::Temporal, Gpu,
+    check_size, compose::Compose, direct::Direct, downsample::Downsample, gather::Gather,
+    gbuffer::GBuffer, interleave::Interleave, ism, shadow::ShadowMaps, temporal::Temporal, Gpu,
 };
 use super::{RendererConfig, Staging};
 use crate::scene::Frame;
@@ -15,41 +15,41 @@ use glam::Vec3;
 
 /// The checks that must pass before anything renders: sizes against the adapter's limits.
 pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
-    if c.max_vpls == 0 || c.max_vpls > 65535 {
-        bail!("--vpls {} is out of range (1 to 65535)", c.max_vpls);
+    if c.slots == 0 || c.slots > 65535 {
+        bail!("`vpls` {} is out of range (1 to 65535)", c.slots);
     }
     if !c.ism_size.is_power_of_two() || !(8..=1024).contains(&c.ism_size) {
         bail!(
-            "--ism-size {} must be a power of two from 8 to 1024",
+            "`ism_size` {} must be a power of two from 8 to 1024",
             c.ism_size
         );
     }
-    if c.points_per_vpl == 0 || c.points_per_vpl > c.num_points {
+    if c.ism_points == 0 || c.ism_points > c.num_points {
         bail!(
-            "--ism-points {} must be 1 to the point-set size {}",
-            c.points_per_vpl,
+            "`ism_points` {} must be 1 to the point-set size {}",
+            c.ism_points,
             c.num_points
         );
     }
     if !(1..=8).contains(&c.interleave) {
-        bail!("--interleave {} is out of range (1 to 8)", c.interleave);
+        bail!("`interleave` {} is out of range (1 to 8)", c.interleave);
     }
-    let pyramid = ism::atlas_bytes(c.max_vpls, c.ism_size) * 4 / 3 + 64;
+    let pyramid = ism::atlas_bytes(c.slots, c.ism_size) * 4 / 3 + 64;
     check_size(
         limits,
-        &format!("the ISM atlas for {} VPLs at {}^2", c.max_vpls, c.ism_size),
+        &format!("the ISM atlas for {} VPLs at {}^2", c.slots, c.ism_size),
         pyramid,
-        "lower --vpls or --ism-size",
+        "lower `vpls` or `ism_size`",
     )?;
     if c.light_samples == 0 || c.light_samples * 5 > limits.max_texture_array_layers {
         bail!(
-            "--light-samples {} is out of range (1 to {} on this adapter: 5 shadow faces each)",
+            "`light_samples` {} is out of range (1 to {} on this adapter: 5 shadow faces each)",
             c.light_samples,
             limits.max_texture_array_layers / 5
         );
     }
     if !(1..=8).contains(&c.aa) {
-        bail!("--aa {} is out of range (1 to 8)", c.aa);
+        bail!("`aa` {} is out of range (1 to 8)", c.aa);
     }
     let max2d = limits.max_texture_dimension_2d;
     if c.width > max2d || c.height > max2d || c.shadow_size > max2d || c.shadow_size < 8 {
@@ -60,12 +60,12 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
             c.shadow_size
         );
     }
-    // Supersampled, the G-buffer and every per-pixel buffer before `resolve` hold aa^2
+    // Supersampled, the G-buffer and every per-pixel buffer before `downsample` hold aa^2
     // sub-samples per pixel.
     let (gw, gh) = (c.width as u64 * c.aa as u64, c.height as u64 * c.aa as u64);
     if gw > max2d as u64 || gh > max2d as u64 {
         bail!(
-            "--aa {} at {}x{} needs a {gw}x{gh} G-buffer but the adapter's textures allow {max2d}: lower --aa or --size",
+            "`aa` {} at {}x{} needs a {gw}x{gh} G-buffer but the adapter's textures allow {max2d}: lower `aa` or `size`",
             c.aa,
             c.width,
             c.height
@@ -73,9 +73,9 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
     }
     check_size(
         limits,
-        &format!("the HDR frame of {gw}x{gh} sub-samples (--aa {})", c.aa),
+        &format!("the HDR frame of {gw}x{gh} sub-samples (`aa` {})", c.aa),
         bytes::<[f32; 4]>(gw * gh),
-        "lower --size or --aa",
+        "lower `size` or `aa`",
     )?;
     Ok(())
 }
@@ -100,7 +100,7 @@ impl Shared {
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let params = gpu.buffer(
             "params",
-            std::mem::size_of::<Params>() as u64,
+            std::mem::size_of::<FrameConstants>() as u64,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let tris = gpu.buffer("tris", bytes::<Tri>(tri_count as u64), storage);
@@ -115,31 +115,31 @@ impl Shared {
             bytes::<Vertex>(tri_count as u64 * 3),
             wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
         );
-        let vpls = gpu.buffer("vpls", bytes::<Vpl>(c.max_vpls as u64), storage);
+        let vpls = gpu.buffer("vpls", bytes::<GpuVpl>(c.slots as u64), storage);
         let lights = gpu.buffer(
             "lights",
-            bytes::<LightSample>(c.light_samples as u64),
+            bytes::<GpuEmitterSample>(c.light_samples as u64),
             storage,
         );
         let points = ism::point_set(points_frame, c.num_points as usize, c.seed);
         // The point set, then room for every slot's near-field points.
         let near_dirs = ism::near_directions(ism::near_grid(c.ism_size, c.pull_levels));
-        let points_len = points.len() as u64 + c.max_vpls as u64 * near_dirs.len() as u64;
+        let points_len = points.len() as u64 + c.slots as u64 * near_dirs.len() as u64;
         check_size(
             &gpu.limits,
             "the ISM points",
             bytes::<ism::Point>(points_len),
-            "lower --vpls or --ism-points",
+            "lower `vpls` or `ism_points`",
         )?;
         let points_buf = gpu.buffer("ism points", bytes::<ism::Point>(points_len), storage);
         gpu.queue
             .write_buffer(&points_buf, 0, bytemuck::cast_slice(&points));
-        let offsets: Vec<u32> = (0..c.max_vpls)
+        let offsets: Vec<u32> = (0..c.slots)
             .map(|s| ism::slot_offset(c.seed, s, c.num_points))
             .collect();
         let slots = gpu.buffer(
             "ism slots to redraw",
-            bytes::<[u32; 2]>(c.max_vpls as u64),
+            bytes::<[u32; 2]>(c.slots as u64),
             storage,
         );
         Ok(Shared {
@@ -167,7 +167,7 @@ pub(super) struct Passes {
     pub(super) interleave: Option<Interleave>,
     pub(super) temporal: Option<Temporal>,
     pub(super) compose: Compose,
-    pub(super) resolve: Option<Resolve>,
+    pub(super) downsample: Option<Downsample>,
 }
 
 impl Passes {
@@ -177,7 +177,7 @@ impl Passes {
         points_frame: &Frame,
         b: &Shared,
     ) -> Result<Passes> {
-        // Every pass before `resolve` runs on the sub-sample grid.
+        // Every pass before `downsample` runs on the sub-sample grid.
         let (gw, gh) = c.grid();
         let pixels = gw as u64 * gh as u64;
         let out_pixels = c.width as u64 * c.height as u64;
@@ -218,7 +218,7 @@ impl Passes {
             &b.points,
             &b.vpls,
             &b.slots,
-            c.max_vpls,
+            c.slots,
             c.ism_size,
             c.pull_levels,
         );
@@ -247,9 +247,9 @@ impl Passes {
         if c.accumulate > 1 {
             check_size(
                 &gpu.limits,
-                &format!("the history of {gw}x{} samples (--accumulate)", c.height),
+                &format!("the history of {gw}x{} samples (`accumulate`)", c.height),
                 bytes::<super::super::temporal::HistorySample>(tile0),
-                "lower --size or --aa, or drop --accumulate",
+                "lower `size` or `aa`, or drop `accumulate`",
             )?;
         }
         let temporal = (c.accumulate > 1).then(|| {
@@ -273,8 +273,8 @@ impl Passes {
             pixels,
             c.aa > 1,
         );
-        let resolve = (c.aa > 1).then(|| {
-            Resolve::new(
+        let downsample = (c.aa > 1).then(|| {
+            Downsample::new(
                 gpu,
                 &b.params,
                 (&compose.hdr, &direct.output, &compose.indirect_ss),
@@ -291,7 +291,7 @@ impl Passes {
             interleave,
             temporal,
             compose,
-            resolve,
+            downsample,
         })
     }
 }

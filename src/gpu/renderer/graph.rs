@@ -126,7 +126,7 @@ pub const GRAPH: [FramePass; 11] = [
         what: "each redrawn slot's paraboloid tile: the nearest depth per texel of its subset of the point set (`atomicMax` on an inverted depth), and its near-field cells from its ray-cast points",
         runs: always,
         encode: |r, enc, f| {
-            let points = r.config.points_per_vpl + r.near_points(f.input);
+            let points = r.config.ism_points + r.near_points(f.input);
             r.ism.encode_splat(enc, f.changed_slots, points);
             Ok(())
         },
@@ -205,16 +205,16 @@ pub const GRAPH: [FramePass; 11] = [
         },
     },
     FramePass {
-        name: "resolve",
-        files: "`gpu/resolve.rs`, `shaders/resolve.wgsl`",
+        name: "downsample",
+        files: "`gpu/downsample.rs`, `shaders/downsample.wgsl`",
         when: "`--aa S > 1`",
         reads: &["hdr", "direct", "indirect"],
         writes: &["hdr", "ldr", "direct", "indirect"],
         what: "the box filter of each pixel's S^2 sub-samples",
-        runs: |r| r.resolve.is_some(),
+        runs: |r| r.downsample.is_some(),
         encode: |r, enc, _| {
             let c = &r.config;
-            if let Some(p) = &r.resolve {
+            if let Some(p) = &r.downsample {
                 p.encode(enc, c.width, c.height);
             }
             Ok(())

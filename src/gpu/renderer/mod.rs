@@ -1,6 +1,6 @@
 //! The GPU frame: uploads the frame's triangles, VPLs and emitter samples, runs the passes in
 //! order (G-buffer, shadow hemicubes, direct light, ISM splat, pull-push, gather, interleave
-//! filter, compose, and with supersampling the resolve that box-filters sub-samples into
+//! filter, compose, and with supersampling the downsample that box-filters sub-samples into
 //! pixels) and reads the frame back, all in one submission (or, profiling without timestamp queries,
 //! one per pass: see `profile`).
 
@@ -11,12 +11,12 @@ pub use build::check_config;
 use build::{Passes, Shared};
 
 use super::bindings::bytes;
-use super::common::{LightSample, Params, Tri, Vpl};
+use super::common::{FrameConstants, GpuEmitterSample, GpuVpl, Tri};
 use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
 use super::{
-    compose::Compose, direct::Direct, gather::Gather, gbuffer::GBuffer, interleave::Interleave,
-    ism, resolve::Resolve, shadow::ShadowMaps, temporal::Temporal, Gpu,
+    compose::Compose, direct::Direct, downsample::Downsample, gather::Gather, gbuffer::GBuffer,
+    interleave::Interleave, ism, shadow::ShadowMaps, temporal::Temporal, Gpu,
 };
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
@@ -32,11 +32,11 @@ pub struct RendererConfig {
     pub width: u32,
     pub height: u32,
     /// VPL slots (atlas tiles).
-    pub max_vpls: u32,
+    pub slots: u32,
     /// ISM tile side in texels.
     pub ism_size: u32,
     /// Points each VPL slot splats.
-    pub points_per_vpl: u32,
+    pub ism_points: u32,
     /// Points in the scene's point set.
     pub num_points: u32,
     /// Pull-push levels (holes up to 2^levels texels are filled).
@@ -52,7 +52,7 @@ pub struct RendererConfig {
     /// Interleaved gather block side (1: every pixel gathers every VPL; see `interleave`),
     /// in sub-samples.
     pub interleave: u32,
-    /// Supersampling: the passes run on `aa x aa` sub-samples per pixel and `resolve`
+    /// Supersampling: the passes run on `aa x aa` sub-samples per pixel and `downsample`
     /// box-filters them into pixels (1: one sample at each pixel centre).
     pub aa: u32,
     /// Camera rays per side for the pixels at emitters' edges (`trace::edges`; 0: off).
@@ -68,7 +68,7 @@ pub struct RendererConfig {
 }
 
 impl RendererConfig {
-    /// The sub-sample grid the passes before `resolve` run on: `aa x aa` tiles of the output
+    /// The sub-sample grid the passes before `downsample` run on: `aa x aa` tiles of the output
     /// size, tile (i, j) sampling every pixel at `gbuffer::subsample(i, j, aa)`.
     pub fn grid(&self) -> (u32, u32) {
         (self.width * self.aa, self.height * self.aa)
@@ -80,9 +80,9 @@ pub struct GpuFrame<'a> {
     pub frame: &'a Frame,
     /// VPL i occupies slot i (and splats slot i's point subset).
     pub vpls: &'a [ShadedVpl],
-    pub lights: &'a [EmitterSample],
+    pub emitter_samples: &'a [EmitterSample],
     /// Distance clamp of the gather (`--clamp`).
-    pub dmin: f32,
+    pub clamp: f32,
     /// The VPLs' near-field points ([`ism::near_points`] over [`Renderer::near_directions`],
     /// in slot order), or none (then the ISMs hold the point set alone).
     pub near: &'a [ism::Point],
@@ -159,8 +159,8 @@ pub struct Drawn {
 #[derive(Default)]
 struct Last {
     tris: Vec<Tri>,
-    vpls: Vec<Vpl>,
-    lights: Vec<LightSample>,
+    vpls: Vec<GpuVpl>,
+    lights: Vec<GpuEmitterSample>,
 }
 
 /// Whether two slices hold the same bits.
@@ -229,7 +229,7 @@ pub struct Renderer {
     pub(crate) temporal: Option<Temporal>,
     pub(crate) compose: Compose,
     /// The box filter of the sub-samples into pixels (`aa > 1`).
-    pub(crate) resolve: Option<Resolve>,
+    pub(crate) downsample: Option<Downsample>,
 }
 
 impl Renderer {
@@ -282,7 +282,7 @@ impl Renderer {
             interleave_shift,
             temporal: p.temporal,
             compose: p.compose,
-            resolve: p.resolve,
+            downsample: p.downsample,
         })
     }
 
@@ -319,12 +319,14 @@ impl Renderer {
                 self.tri_count
             );
         }
-        if input.vpls.len() > c.max_vpls as usize || input.lights.len() > c.light_samples as usize {
+        if input.vpls.len() > c.slots as usize
+            || input.emitter_samples.len() > c.light_samples as usize
+        {
             bail!(
                 "{} VPLs / {} light samples exceed the renderer's {} / {}",
                 input.vpls.len(),
-                input.lights.len(),
-                c.max_vpls,
+                input.emitter_samples.len(),
+                c.slots,
                 c.light_samples
             );
         }
@@ -370,9 +372,9 @@ impl Renderer {
     /// ISM tile must be drawn again; returns those slots and whether the VPLs were uploaded.
     fn upload_vpls(&mut self, shaded: &[ShadedVpl], still: bool) -> (Vec<u32>, bool) {
         let v4 = |v: Vec3| v.extend(0.0).to_array();
-        let vpls: Vec<Vpl> = shaded
+        let vpls: Vec<GpuVpl> = shaded
             .iter()
-            .map(|v| Vpl {
+            .map(|v| GpuVpl {
                 pos: v4(v.position),
                 normal: v4(v.normal),
                 flux: v4(v.flux),
@@ -407,7 +409,10 @@ impl Renderer {
     /// on); returns whether they are the same.
     fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
         let size = self.config.shadow_size;
-        let lights: Vec<LightSample> = samples.iter().map(|s| LightSample::of(s, size)).collect();
+        let lights: Vec<GpuEmitterSample> = samples
+            .iter()
+            .map(|s| GpuEmitterSample::of(s, size))
+            .collect();
         let same_bits = same(&self.last.lights, &lights);
         let kept = self.reuse && same_bits;
         if !lights.is_empty() && !kept {
@@ -440,7 +445,7 @@ impl Renderer {
                 bytemuck::cast_slice(input.near),
             );
         }
-        let same_lights = self.upload_lights(input.lights);
+        let same_lights = self.upload_lights(input.emitter_samples);
         let lights_kept = self.reuse && same_lights;
         // The history holds while the light is the same: same triangles, same emitter samples.
         let history_kept = if let Some(t) = &mut self.temporal {
@@ -452,17 +457,17 @@ impl Renderer {
         let c = &self.config;
         let (gw, gh) = c.grid();
         let near_points = self.near_points(input);
-        let params = Params {
+        let params = FrameConstants {
             width: gw,
             height: gh,
             num_vpls: input.vpls.len() as u32,
             ism_size: c.ism_size,
-            points_per_vpl: c.points_per_vpl,
+            ism_points: c.ism_points,
             num_points: c.num_points,
-            num_light_samples: input.lights.len() as u32,
+            num_light_samples: input.emitter_samples.len() as u32,
             shadow_size: c.shadow_size,
             far,
-            dmin: input.dmin,
+            clamp: input.clamp,
             exposure: c.exposure,
             ism_bias: c.ism_bias,
             cam_pos: f.camera.position.extend(1.0).to_array(),
@@ -508,7 +513,10 @@ impl Renderer {
                 rec.end_pass(p.name)?;
             }
         }
-        Ok((!f.shadows_drawn && !f.input.lights.is_empty(), f.drawn))
+        Ok((
+            !f.shadows_drawn && !f.input.emitter_samples.is_empty(),
+            f.drawn,
+        ))
     }
 
     /// The mesh instances the raster passes cull by (none with culling off: all is drawn).
@@ -542,7 +550,7 @@ impl Renderer {
         f.shadows_drawn = self.shadows.encode(
             &self.gpu,
             enc,
-            f.input.lights,
+            f.input.emitter_samples,
             (f.near, f.far),
             (&self.vertices, self.tri_count as u32),
             (instances, self.cull),
@@ -595,7 +603,7 @@ impl Renderer {
         let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
         let st = &self.staging;
         // The frame and its parts at the output size: resolved, or (aa = 1) as composed.
-        let (hdr, ldr, direct, indirect) = match &self.resolve {
+        let (hdr, ldr, direct, indirect) = match &self.downsample {
             Some(r) => (&r.hdr, &r.ldr, &r.direct, &r.indirect),
             None => (
                 &self.compose.hdr,
@@ -753,7 +761,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("--aa 3") && e.contains("3072x3072") && e.contains("lower --aa or --size"),
+            e.contains("`aa` 3") && e.contains("3072x3072") && e.contains("lower `aa` or `size`"),
             "{e}"
         );
         // 2048^2 sub-samples of 16 bytes fit 128 MiB buffers exactly; a smaller limit refuses.
@@ -765,7 +773,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("--aa 2") && e.contains("lower --size or --aa"),
+            e.contains("`aa` 2") && e.contains("lower `size` or `aa`"),
             "{e}"
         );
         check_config(&config(512, 512, 2), &small).unwrap();
@@ -773,7 +781,7 @@ mod tests {
             let e = check_config(&config(64, 64, bad), &limits)
                 .unwrap_err()
                 .to_string();
-            assert!(e.contains("--aa") && e.contains("1 to 8"), "{e}");
+            assert!(e.contains("`aa`") && e.contains("1 to 8"), "{e}");
         }
     }
 }

@@ -34,7 +34,7 @@ impl VplSampler for Cdf {
             f,
             p.candidates,
             p.knobs.eps,
-            p.dmin,
+            p.clamp,
         );
         if c.vpls.is_empty() {
             return Selection {

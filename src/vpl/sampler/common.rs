@@ -130,7 +130,7 @@ impl Candidates {
         stream: u64,
         m: usize,
         eps: f32,
-        dmin: f32,
+        clamp: f32,
     ) -> Self {
         let t = Instant::now();
         let (vpls, paths) = fresh_paths(frame, tracer, seed, stream, m, false);
@@ -141,7 +141,7 @@ impl Candidates {
             tracer,
             points,
             eps,
-            dmin,
+            clamp,
         )
     }
 
@@ -154,9 +154,9 @@ impl Candidates {
         tracer: &Tracer,
         points: &[CameraPoint],
         eps: f32,
-        dmin: f32,
+        clamp: f32,
     ) -> Self {
-        let raw = importance_all(&vpls, points, tracer, dmin);
+        let raw = importance_all(&vpls, points, tracer, clamp);
         let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
         let floor = (eps as f64 * mean) as f32;
         Candidates {

@@ -73,9 +73,13 @@ impl Knob {
     pub fn used_by(&self, s: SamplerKind) -> bool {
         self.used_by.contains(&s)
     }
-    /// Checks `v` against the range, naming the flag.
+    /// The knob as errors name a setting: `` `mh_rate` `` (the CLI writes `--mh-rate`).
+    pub fn setting(&self) -> String {
+        format!("`{}`", self.name.replace('-', "_"))
+    }
+    /// Checks `v` against the range, naming the setting.
     pub fn check(&self, v: f64) -> Result<()> {
-        let flag = format!("--{}", self.name);
+        let flag = self.setting();
         match self.range {
             Range::Float { lo, lo_open, hi } => {
                 crate::check::float(&flag, v as f32, lo, lo_open, hi)
@@ -187,7 +191,7 @@ impl SamplerKnobs {
             }
         }
         crate::check::int(
-            "--candidates (4 x --vpls)",
+            "`candidates` (4 x `vpls`)",
             self.candidates(vpls),
             1,
             1 << 24,
@@ -225,6 +229,6 @@ mod tests {
         assert_eq!(Knob::named("--mh-rate").unwrap().name, "mh-rate");
         assert!(Knob::named("mh_rate").is_none());
         let e = Knob::named("mh-rate").unwrap().check(0.0).unwrap_err();
-        assert!(e.to_string().contains("--mh-rate 0 is out of range"), "{e}");
+        assert!(e.to_string().contains("`mh_rate` 0 is out of range"), "{e}");
     }
 }

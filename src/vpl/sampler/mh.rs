@@ -98,7 +98,7 @@ impl Mh {
                 let v = trace_path(frame, tracer, p.seed, path)
                     .into_iter()
                     .find(|v| v.depth == depth)?;
-                let i = importance(&v, points, tracer, p.dmin) + floor;
+                let i = importance(&v, points, tracer, p.clamp) + floor;
                 Some((v, i))
             })
             .collect()
@@ -186,7 +186,7 @@ impl Mh {
             fresh: &fresh,
             points,
             tracer,
-            dmin: p.dmin,
+            clamp: p.clamp,
             floor: pool.floor,
         };
         if !fresh.is_empty() {
@@ -268,7 +268,7 @@ impl VplSampler for Mh {
             false,
         );
         let paths_s = t_pool.elapsed().as_secs_f64();
-        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.knobs.eps, p.dmin);
+        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.knobs.eps, p.clamp);
         let mut paths_s = pool.paths_s;
         if pool.vpls.is_empty() {
             self.chains.clear();
@@ -309,7 +309,7 @@ impl VplSampler for Mh {
             pool.b,
             Some(acceptance),
         );
-        s.mh_rate = Some(rate);
+        s.renewal_rate = Some(rate);
         s.importance_s = t.elapsed().as_secs_f64() - paths_s;
         s
     }
@@ -320,7 +320,7 @@ struct Step<'a> {
     fresh: &'a [Vpl],
     points: &'a [CameraPoint],
     tracer: &'a Tracer,
-    dmin: f32,
+    clamp: f32,
     floor: f32,
 }
 
@@ -332,7 +332,7 @@ impl Step<'_> {
         need.dedup();
         let got: Vec<f32> = need
             .par_iter()
-            .map(|&j| importance(&self.fresh[j], self.points, self.tracer, self.dmin) + self.floor)
+            .map(|&j| importance(&self.fresh[j], self.points, self.tracer, self.clamp) + self.floor)
             .collect();
         for (j, i) in need.into_iter().zip(got) {
             memo[j] = Some(i);

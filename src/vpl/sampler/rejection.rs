@@ -45,7 +45,7 @@ impl VplSampler for Rejection {
         let t = Instant::now();
         let points = p.camera_points(frame, tracer);
         let (pilot, _) = fresh_paths(frame, tracer, p.seed, PILOT + f, p.slots, false);
-        let pi = importance_all(&pilot, &points, tracer, p.dmin);
+        let pi = importance_all(&pilot, &points, tracer, p.clamp);
         let target = (pi.iter().map(|&x| x as f64).sum::<f64>() / pi.len().max(1) as f64) as f32;
         let n = p.slots;
         let mut kept: Vec<(Vpl, f32)> = Vec::with_capacity(n);
@@ -63,7 +63,7 @@ impl VplSampler for Rejection {
                         trace_path(frame, tracer, p.seed, id)
                             .into_iter()
                             .filter_map(|v| {
-                                let i = importance(&v, &points, tracer, p.dmin);
+                                let i = importance(&v, &points, tracer, p.clamp);
                                 let q = keep_probability(i, target, p.knobs.eps);
                                 let u: f32 = rng(&[p.seed, id, v.depth as u64, 0x4e7]).random();
                                 (u < q).then_some((v, q))

@@ -130,7 +130,7 @@ fn vertices(
     let v = trace_path(frame, tracer, p.seed, path);
     let imp = if v.len() > 1 || always {
         v.iter()
-            .map(|x| importance(x, points, tracer, p.dmin))
+            .map(|x| importance(x, points, tracer, p.clamp))
             .collect()
     } else {
         vec![0.0; v.len()]
@@ -231,7 +231,7 @@ impl VplSampler for Smc {
         self.particles = particles;
         selection.vpls = vpls;
         selection.shaded = shaded;
-        selection.mh_rate = Some(0.5 * (rates[0] + rates[1]));
+        selection.renewal_rate = Some(0.5 * (rates[0] + rates[1]));
         selection.importance_s = t.elapsed().as_secs_f64() - paths_s;
         selection
     }
@@ -280,7 +280,7 @@ fn newborns(
         f,
         p.candidates,
         p.knobs.eps,
-        p.dmin,
+        p.clamp,
     );
     let mut out = Newborns {
         born: Vec::with_capacity(k),

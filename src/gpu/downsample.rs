@@ -1,19 +1,19 @@
-//! Resolve pass (`shaders/resolve.wgsl`), with supersampling (`--aa S` > 1): every pass
+//! Downsample pass (`shaders/downsample.wgsl`), with supersampling (`--aa S` > 1): every pass
 //! before it ran on S x S sub-samples per pixel; each output pixel is the box-filtered mean
 //! of its sub-samples, for the HDR frame, its direct and indirect parts, and the 8-bit
 //! preview (see docs/antialiasing.md).
 
 use super::bindings::{bytes, params, read, read_write, Elem, Group, Pass};
-use super::common::Params;
+use super::common::FrameConstants;
 use super::{Gpu, PixelPass};
 
 pub(crate) const PASS: Pass = Pass {
-    name: "resolve",
-    wgsl: include_str!("../../shaders/resolve.wgsl"),
+    name: "downsample",
+    wgsl: include_str!("../../shaders/downsample.wgsl"),
     groups: &[Group {
         stages: wgpu::ShaderStages::COMPUTE,
         bindings: &[
-            params("P", &Params::LAYOUT),
+            params("P", &FrameConstants::LAYOUT),
             read("hdr_in", Elem::Plain(16)),
             read("direct_in", Elem::Plain(16)),
             read("indirect_in", Elem::Plain(16)),
@@ -26,7 +26,7 @@ pub(crate) const PASS: Pass = Pass {
 };
 
 /// The resolved frame at the output size.
-pub struct Resolve {
+pub struct Downsample {
     pass: PixelPass,
     pub hdr: wgpu::Buffer,
     pub ldr: wgpu::Buffer,
@@ -34,7 +34,7 @@ pub struct Resolve {
     pub indirect: wgpu::Buffer,
 }
 
-impl Resolve {
+impl Downsample {
     /// Resolves the sub-sample buffers `hdr`, `direct` and `indirect` into buffers of
     /// `pixels` output pixels.
     pub fn new(
@@ -62,7 +62,7 @@ impl Resolve {
                 ("indirect", indirect.as_entire_binding()),
             ],
         );
-        Resolve {
+        Downsample {
             pass,
             hdr,
             ldr,

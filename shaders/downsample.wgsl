@@ -7,7 +7,7 @@
 // so the resolved parts still sum to the resolved frame), then the 8-bit preview is taken
 // from the resolved HDR.
 
-@group(0) @binding(0) var<storage, read> P: Params;
+@group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> hdr_in: array<vec4f>;
 @group(0) @binding(2) var<storage, read> direct_in: array<vec4f>;
 @group(0) @binding(3) var<storage, read> indirect_in: array<vec4f>;

@@ -1,59 +1,64 @@
-//! The GPU renderer's quality knobs.
+//! The GPU renderer's quality knobs: the renderer's own settings, with their defaults and one
+//! `validate()`; [`crate::resolve`] turns them (and the scene's budgets) into a
+//! [`super::RendererConfig`].
 
-use super::*;
+use crate::check;
 use anyhow::{bail, Result};
-use clap::Args;
 use serde::Serialize;
 
+/// The largest width or height any command accepts (images, shadow faces).
+pub const MAX_SIZE: u32 = 8192;
+
 /// The GPU renderer's quality knobs (stage 7).
-#[derive(Args, Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct Quality {
     /// ISM tile side in texels (a power of two, 8 to 1024)
-    #[arg(long, default_value_t = Quality::default().ism_size, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().ism_size, allow_hyphen_values = true))]
     pub ism_size: u32,
     /// Points of the scene's point set each VPL splats into its ISM (besides its ray-cast
     /// near-field points); 0: from the scene, enough that the points a VPL sees close its tile
     /// at pull-push's coarsest level and at least one for every 32 triangles (see
     /// `ism_points_for`), 64 to 4096
-    #[arg(long, default_value_t = Quality::default().ism_points, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().ism_points, allow_hyphen_values = true))]
     pub ism_points: u32,
     /// Pull-push levels of the ISMs (holes up to 2^levels texels are filled; at most log2 of --ism-size)
-    #[arg(long, default_value_t = Quality::default().pull_levels, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().pull_levels, allow_hyphen_values = true))]
     pub pull_levels: u32,
     /// ISM depth bias, in texel footprints
-    #[arg(long, default_value_t = Quality::default().ism_bias, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().ism_bias, allow_hyphen_values = true))]
     pub ism_bias: f32,
     /// Emitter samples for direct light (each a shadow hemicube); 0: from the scene, enough
     /// that the direct light's sampling noise is about 5% of it where the camera looks at
     /// frame 0 (see `light_samples_for`), 4 to 64
-    #[arg(long, default_value_t = Quality::default().light_samples, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().light_samples, allow_hyphen_values = true))]
     pub light_samples: u32,
     /// Shadow hemicube face side in texels
-    #[arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().shadow_size, allow_hyphen_values = true))]
     pub shadow_size: u32,
     /// Interleaved gather: each pixel of an NxN block gathers every (N^2)-th VPL, then a
     /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all;
     /// 0: from the VPL count, 8 from 4096 VPLs, else 4; see `interleave_for`)
-    #[arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true))]
     pub interleave: u32,
     /// Anti-aliasing: S x S sub-samples per pixel, box-filtered into the pixel (the
     /// reference's pixel filter); the passes run at S times the size (1: pixel centres only)
-    #[arg(long, default_value_t = Quality::default().aa, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().aa, allow_hyphen_values = true))]
     pub aa: u32,
     /// Emitter edges: in pixels where an emitter's edge crosses the sub-samples, its emission
     /// is box-filtered from N x N camera rays cast on the CPU (0: off, the sub-samples only;
     /// the rest of such a pixel's light stays as the sub-samples give it)
-    #[arg(long, default_value_t = Quality::default().edge_rays, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().edge_rays, allow_hyphen_values = true))]
     pub edge_rays: u32,
     /// Clamping-bias compensation: K short rays a pixel (CPU) add back the light the distance
     /// clamp leaves out where surfaces meet within --clamp (Kollig & Keller 2004; 0: off)
-    #[arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true))]
     pub compensate: u32,
     /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'
     /// estimates of its surface point (reprojected; a disoccluded pixel starts anew), while
     /// the triangles and emitter samples stay the same; a moving light or object starts it
     /// anew everywhere (0 or 1: off, every frame stands alone)
-    #[arg(long, default_value_t = Quality::default().accumulate, allow_hyphen_values = true)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().accumulate, allow_hyphen_values = true))]
     pub accumulate: u32,
 }
 
@@ -94,25 +99,25 @@ impl Quality {
     pub fn validate(&self) -> Result<()> {
         if !self.ism_size.is_power_of_two() || !(8..=1024).contains(&self.ism_size) {
             bail!(
-                "--ism-size {} is out of range: it must be a power of two from 8 to 1024",
+                "`ism_size` {} is out of range: it must be a power of two from 8 to 1024",
                 self.ism_size
             );
         }
         // The splat dispatches one invocation per point in x: 65535 groups of 64.
-        check::int("--ism-points", self.ism_points, 0, 65535 * 64)?;
+        check::int("`ism_points`", self.ism_points, 0, 65535 * 64)?;
         check::int(
-            "--pull-levels",
+            "`pull_levels`",
             self.pull_levels,
             0,
             self.ism_size.trailing_zeros(),
         )?;
-        check::float("--ism-bias", self.ism_bias, 0.0, false, 100.0)?;
-        check::int("--light-samples", self.light_samples, 0, 4096)?;
-        check::int("--shadow-size", self.shadow_size, 8, MAX_SIZE)?;
-        check::int("--interleave", self.interleave, 0, 8)?;
-        check::int("--aa", self.aa, 1, 8)?;
-        check::int("--edge-rays", self.edge_rays, 0, 32)?;
-        check::int("--compensate", self.compensate, 0, 256)?;
-        check::int("--accumulate", self.accumulate, 0, 4096)
+        check::float("`ism_bias`", self.ism_bias, 0.0, false, 100.0)?;
+        check::int("`light_samples`", self.light_samples, 0, 4096)?;
+        check::int("`shadow_size`", self.shadow_size, 8, MAX_SIZE)?;
+        check::int("`interleave`", self.interleave, 0, 8)?;
+        check::int("`aa`", self.aa, 1, 8)?;
+        check::int("`edge_rays`", self.edge_rays, 0, 32)?;
+        check::int("`compensate`", self.compensate, 0, 256)?;
+        check::int("`accumulate`", self.accumulate, 0, 4096)
     }
 }
