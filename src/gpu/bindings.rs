@@ -290,24 +290,15 @@ pub(crate) fn bytes<T>(n: u64) -> u64 {
     n * std::mem::size_of::<T>() as u64
 }
 
-/// Every pass's table, for the layout test.
+/// Every pass's table, for the layout test: the frame's passes as the renderer's graph
+/// lists them, and the classical methods' two.
 #[cfg(test)]
 pub(crate) fn all_passes() -> Vec<&'static Pass> {
-    vec![
-        &super::gbuffer::PASS,
-        &super::surface::PASS,
-        &super::shadow::PASS,
-        &super::direct::PASS,
-        &super::ism::SPLAT,
-        &super::ism::PULL_PUSH,
-        &super::gather::PASS,
-        &super::interleave::PASS,
-        &super::compose::PASS,
-        &super::temporal::PASS,
-        &super::downsample::PASS,
-        &super::hemicube::PASS,
-        &super::radiosity::PASS,
-    ]
+    let frame = super::renderer::graph::GRAPH.iter().flat_map(|p| p.tables);
+    frame
+        .copied()
+        .chain([&super::hemicube::PASS, &super::radiosity::PASS])
+        .collect()
 }
 
 #[cfg(test)]

@@ -4,14 +4,14 @@
 use super::super::bindings::bytes;
 use super::super::common::{FrameConstants, GpuEmitterSample, GpuVpl, Tri};
 use super::super::gbuffer::Vertex;
-use super::super::{
-    check_size, compose::Compose, direct::Direct, downsample::Downsample, gather::Gather,
-    gbuffer::GBuffer, interleave::Interleave, ism, shadow::ShadowMaps, temporal::Temporal, Gpu,
-};
+use super::super::surface::TextureData;
+use super::super::{check_size, ism, Gpu};
+use super::pass::FramePass;
 use super::{RendererConfig, Staging};
 use crate::scene::Frame;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
+use std::collections::HashMap;
 
 /// The checks that must pass before anything renders: sizes against the adapter's limits.
 pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
@@ -156,144 +156,129 @@ impl Shared {
     }
 }
 
-/// The passes of [`GRAPH`], built over the shared buffers.
-pub(super) struct Passes {
-    pub(super) gbuffer: GBuffer,
-    pub(super) surface: Option<super::super::surface::SurfacePass>,
-    pub(super) shadows: ShadowMaps,
-    pub(super) direct: Direct,
-    pub(super) ism: ism::Ism,
-    pub(super) gather: Gather,
-    pub(super) interleave: Option<Interleave>,
-    pub(super) temporal: Option<Temporal>,
-    pub(super) compose: Compose,
-    pub(super) downsample: Option<Downsample>,
+/// What the passes of [`GRAPH`](super::graph::GRAPH) are built from: the adapter, the
+/// settings, the frame that sizes them, the shared buffers, and the named resources the passes
+/// built before wrote (`gbuffer`, `surface`, `indirect`, ...). A pass reads a resource by the
+/// name its graph entry declares in `reads` and writes it by a name declared in `writes`
+/// (its own, or those of the passes after it that share its GPU state, as `ism_pullpush`
+/// shares `ism_splat`'s); the builder refuses any other, so the declarations are the code's.
+pub(crate) struct Builder<'a> {
+    pub(crate) gpu: &'a Gpu,
+    pub(crate) c: &'a RendererConfig,
+    pub(crate) frame: &'a Frame,
+    pub(crate) shared: &'a Shared,
+    pub(crate) textures: TextureData,
+    buffers: HashMap<&'static str, wgpu::Buffer>,
+    views: HashMap<&'static str, wgpu::TextureView>,
+    /// The graph entries whose declarations the pass being built may use.
+    current: &'static [FramePass],
 }
 
-impl Passes {
+impl<'a> Builder<'a> {
     pub(super) fn new(
-        gpu: &Gpu,
-        c: &RendererConfig,
-        points_frame: &Frame,
-        b: &Shared,
-    ) -> Result<Passes> {
-        // Every pass before `downsample` runs on the sub-sample grid.
-        let (gw, gh) = c.grid();
-        let pixels = gw as u64 * gh as u64;
-        let out_pixels = c.width as u64 * c.height as u64;
-        let texture_data = super::super::surface::TextureData::new(gpu, points_frame)?;
-        let gbuffer = GBuffer::new(gpu, (c.width, c.height, c.aa), &texture_data, &b.tris);
-        let surface_buf = gpu.buffer(
-            "surface",
-            bytes::<super::super::common::Surface>(pixels),
-            wgpu::BufferUsages::STORAGE,
-        );
-        let surface = super::super::surface::SurfacePass::new(
+        gpu: &'a Gpu,
+        c: &'a RendererConfig,
+        frame: &'a Frame,
+        shared: &'a Shared,
+    ) -> Result<Self> {
+        Ok(Builder {
             gpu,
-            &texture_data,
-            &b.params,
-            &b.tris,
-            (&gbuffer.view, &surface_buf),
-        );
-        let shadows = ShadowMaps::new(
-            gpu,
-            (c.shadow_size, c.light_samples),
-            (points_frame.tris.len() as u32, points_frame.has_cutouts()),
-            &texture_data,
-            &b.tris,
-        );
-        let direct = Direct::new(
-            gpu,
-            &b.params,
-            &b.tris,
-            &b.lights,
-            &shadows.array_view,
-            (&gbuffer.view, &surface_buf),
-            pixels,
-        );
-        let ism = ism::Ism::new(
-            gpu,
-            &b.params,
-            &b.tris,
-            &b.points,
-            &b.vpls,
-            &b.slots,
-            c.slots,
-            c.ism_size,
-            c.pull_levels,
-        );
-        let gather = Gather::new(
-            gpu,
-            &b.params,
-            &b.tris,
-            &b.vpls,
-            &ism.pyramid,
-            (&gbuffer.view, &surface_buf),
-            pixels,
-        );
-        let interleave = (c.interleave > 1).then(|| {
-            Interleave::new(
-                gpu,
-                &b.params,
-                &b.tris,
-                (&gbuffer.view, &surface_buf),
-                &gather.output,
-                pixels,
-            )
-        });
-        let indirect = interleave.as_ref().map_or(&gather.output, |f| &f.output);
-        // The pixels' samples are tile 0's: rows 0..height of the grid.
-        let tile0 = gw as u64 * c.height as u64;
-        if c.accumulate > 1 {
-            check_size(
-                &gpu.limits,
-                &format!("the history of {gw}x{} samples (`accumulate`)", c.height),
-                bytes::<super::super::temporal::HistorySample>(tile0),
-                "lower `size` or `aa`, or drop `accumulate`",
-            )?;
-        }
-        let temporal = (c.accumulate > 1).then(|| {
-            Temporal::new(
-                gpu,
-                &b.params,
-                &b.tris,
-                &gbuffer.view,
-                indirect,
-                tile0,
-                c.accumulate,
-            )
-        });
-        let indirect = temporal.as_ref().map_or(indirect, |t| &t.output);
-        let compose = Compose::new(
-            gpu,
-            &b.params,
-            &b.tris,
-            (&gbuffer.view, &surface_buf),
-            (&direct.output, indirect),
-            pixels,
-            c.aa > 1,
-        );
-        let downsample = (c.aa > 1).then(|| {
-            Downsample::new(
-                gpu,
-                &b.params,
-                (&compose.hdr, &direct.output, &compose.indirect_ss),
-                out_pixels,
-            )
-        });
-        Ok(Passes {
-            gbuffer,
-            surface,
-            shadows,
-            direct,
-            ism,
-            gather,
-            interleave,
-            temporal,
-            compose,
-            downsample,
+            c,
+            frame,
+            shared,
+            textures: TextureData::new(gpu, frame)?,
+            buffers: HashMap::new(),
+            views: HashMap::new(),
+            current: &[],
         })
     }
+
+    /// The next pass built declares its reads and writes in `entries`.
+    pub(super) fn enter(&mut self, entries: &'static [FramePass]) {
+        self.current = entries;
+    }
+
+    fn declared(&self, name: &str, what: &str) -> Result<()> {
+        declared(self.current, name, what)
+    }
+
+    /// The buffer `name`, as the last pass that wrote it left it.
+    pub(crate) fn buffer(&self, name: &str) -> Result<&wgpu::Buffer> {
+        self.declared(name, "reads")?;
+        self.buffers
+            .get(name)
+            .ok_or_else(|| anyhow!("the renderer's graph reads `{name}` before a pass writes it"))
+    }
+
+    /// The texture view `name`, as the last pass that wrote it left it.
+    pub(crate) fn view(&self, name: &str) -> Result<&wgpu::TextureView> {
+        self.declared(name, "reads")?;
+        self.views
+            .get(name)
+            .ok_or_else(|| anyhow!("the renderer's graph reads `{name}` before a pass writes it"))
+    }
+
+    /// The pass being built writes `buffer` as `name` (later passes read it by that name).
+    pub(crate) fn write(&mut self, name: &'static str, buffer: &wgpu::Buffer) -> Result<()> {
+        self.declared(name, "writes")?;
+        self.buffers.insert(name, buffer.clone());
+        Ok(())
+    }
+
+    /// The pass being built writes `view` as `name`.
+    pub(crate) fn write_view(
+        &mut self,
+        name: &'static str,
+        view: &wgpu::TextureView,
+    ) -> Result<()> {
+        self.declared(name, "writes")?;
+        self.views.insert(name, view.clone());
+        Ok(())
+    }
+
+    /// Samples on the sub-sample grid (what every pass before `downsample` runs on).
+    pub(crate) fn grid_pixels(&self) -> u64 {
+        let (gw, gh) = self.c.grid();
+        gw as u64 * gh as u64
+    }
+
+    /// What the graph leaves in `hdr`, `ldr`, `direct` and `indirect`: the buffers read back.
+    pub(super) fn outputs(&self) -> Result<Outputs> {
+        let get = |name: &str| {
+            self.buffers
+                .get(name)
+                .cloned()
+                .ok_or_else(|| anyhow!("the renderer's graph never writes `{name}`"))
+        };
+        Ok(Outputs {
+            hdr: get("hdr")?,
+            ldr: get("ldr")?,
+            direct: get("direct")?,
+            indirect: get("indirect")?,
+        })
+    }
+}
+
+/// Whether the pass whose graph entries are `current` (the pass, then those after it that use
+/// its GPU state) declares `name` in `what` (`reads`: the pass's own; `writes`: any of them).
+pub(super) fn declared(current: &[FramePass], name: &str, what: &str) -> Result<()> {
+    let ok = match what {
+        "reads" => current.first().is_some_and(|p| p.reads.contains(&name)),
+        _ => current.iter().any(|p| p.writes.contains(&name)),
+    };
+    if !ok {
+        let pass = current.first().map_or("?", |p| p.name);
+        bail!("the renderer's pass `{pass}` uses `{name}`, which its graph entry does not list in `{what}`");
+    }
+    Ok(())
+}
+
+/// The frame's outputs at the output size, as the last passes that wrote them left them.
+pub(super) struct Outputs {
+    pub(super) hdr: wgpu::Buffer,
+    pub(super) ldr: wgpu::Buffer,
+    pub(super) direct: wgpu::Buffer,
+    pub(super) indirect: wgpu::Buffer,
 }
 
 impl Staging {

@@ -1,68 +1,78 @@
-//! The frame's passes as one declared list ([`GRAPH`]): each pass's name (its timing label),
-//! when it runs, what it reads and writes, and how it encodes. The renderer records them in
-//! this order, skipping those that do not run; the timings are labelled by these names; the
-//! buffer read back as the indirect light is the output of the last running pass that writes
-//! `indirect`; and the pass table of `docs/design.md` is [`pass_table`] (a test holds the
-//! two together). Adding a pass touches its shader, its Rust file and this list.
+//! The frame's passes as one declared list ([`GRAPH`], written with [`graph!`]): each pass's
+//! name (its timing label), when it runs, what it reads and writes, how its GPU state is built
+//! over the named resources of the passes before it ([`Builder`], which refuses a name the
+//! entry does not declare), and how it encodes. [`Passes`] holds the built state, one field an
+//! entry; the renderer records the passes in this order, skipping those that do not run; the
+//! timings are labelled by these names; the buffers read back are the `hdr`, `ldr`, `direct`
+//! and `indirect` the last passes that write them leave; and the pass table of
+//! `docs/design.md` is [`pass_table`] (a test holds the two together). Adding a pass touches
+//! its shader, its Rust file and this list.
 
-use super::{Drawn, GpuFrame, Renderer};
+use super::build::Builder;
+use super::pass::FramePass;
+use super::Renderer;
+use crate::gpu::bindings::bytes;
+use crate::gpu::common::Surface;
+use crate::gpu::{
+    check_size, compose::Compose, direct::Direct, downsample::Downsample, gather::Gather,
+    gbuffer::GBuffer, interleave::Interleave, ism::Ism, shadow::ShadowMaps, surface::SurfacePass,
+    temporal::HistorySample, temporal::Temporal,
+};
 use anyhow::Result;
 
-/// One pass of the frame.
-pub struct FramePass {
-    /// Its timing label in run records.
-    pub name: &'static str,
-    /// Its Rust and WGSL files.
-    pub files: &'static str,
-    /// When it runs (for the docs); [`FramePass::runs`] decides.
-    pub when: &'static str,
-    /// The named resources it reads and writes.
-    pub reads: &'static [&'static str],
-    pub writes: &'static [&'static str],
-    /// What it computes (for the docs).
-    pub what: &'static str,
-    runs: fn(&Renderer) -> bool,
-    encode: fn(&mut Renderer, &mut wgpu::CommandEncoder, &mut Frame) -> Result<()>,
-}
+/// Declares the graph: a list of `pass FramePass { .. },` entries, in order, each of which
+/// may be preceded by `build FIELD: TYPE = |b| { .. };`, the [`Passes`] field holding the GPU
+/// state its encode uses and how it is built from the [`Builder`] `b` (an entry without one
+/// uses the state of the last entry before it that has one).
+macro_rules! graph {
+    ($( $(build $field:ident: $ty:ty = |$b:ident| $body:block;)? pass $pass:expr, )*) => {
+        /// The passes of a frame, in order.
+        pub const GRAPH: [FramePass; [$(stringify!($pass)),*].len()] = [$($pass,)*];
+        static ENTRIES: [FramePass; GRAPH.len()] = GRAPH;
+        /// Which entries of [`GRAPH`] build GPU state of their own.
+        const BUILDS: [bool; GRAPH.len()] = [$(graph!(@builds $($field)?)),*];
 
-impl FramePass {
-    /// Whether the pass runs in `r` (from the renderer's settings and the scene).
-    pub fn runs(&self, r: &Renderer) -> bool {
-        (self.runs)(r)
-    }
-    pub(crate) fn encode(
-        &self,
-        r: &mut Renderer,
-        enc: &mut wgpu::CommandEncoder,
-        f: &mut Frame,
-    ) -> Result<()> {
-        (self.encode)(r, enc, f)
-    }
-}
+        /// The GPU state of the passes of [`GRAPH`].
+        pub(crate) struct Passes {
+            $($(pub(crate) $field: $ty,)?)*
+        }
 
-/// What the passes of one frame share: the frame, the slots whose ISM tiles are redrawn, the
-/// depth ranges, and what the raster passes report.
-pub(crate) struct Frame<'a, 'b> {
-    pub input: &'a GpuFrame<'b>,
-    pub changed_slots: u32,
-    pub geometry_kept: bool,
-    /// The ISMs' and hemicubes' depth range, and the G-buffer's camera.
-    pub near: f32,
-    pub far: f32,
-    pub view_proj: glam::Mat4,
-    /// What the raster passes drew, and whether the shadow maps were drawn this frame.
-    pub drawn: Drawn,
-    pub shadows_drawn: bool,
+        impl Passes {
+            /// Builds each entry's state in the order of [`GRAPH`].
+            pub(super) fn new(builder: &mut Builder) -> Result<Passes> {
+                let mut i = 0;
+                $(
+                    $(
+                        let end = (i + 1..GRAPH.len()).find(|&j| BUILDS[j]).unwrap_or(GRAPH.len());
+                        builder.enter(&ENTRIES[i..end]);
+                        let build = |$b: &mut Builder| -> Result<$ty> { $body };
+                        let $field: $ty = build(&mut *builder)?;
+                    )?
+                    i += 1;
+                )*
+                let _ = i;
+                Ok(Passes { $($($field,)?)* })
+            }
+        }
+    };
+    (@builds $field:ident) => { true };
+    (@builds) => { false };
 }
 
 fn always(_: &Renderer) -> bool {
     true
 }
 
-/// The passes of a frame, in order.
-pub const GRAPH: [FramePass; 11] = [
-    FramePass {
+graph! {
+    build gbuffer: GBuffer = |b| {
+        let c = b.c;
+        let g = GBuffer::new(b.gpu, (c.width, c.height, c.aa), &b.textures, &b.shared.tris);
+        b.write_view("gbuffer", &g.view)?;
+        Ok(g)
+    };
+    pass FramePass {
         name: "gbuffer",
+        tables: &[&crate::gpu::gbuffer::PASS],
         files: "`gpu/gbuffer.rs`, `shaders/gbuffer.wgsl`",
         when: "always",
         reads: &["vertices", "camera"],
@@ -74,24 +84,56 @@ pub const GRAPH: [FramePass; 11] = [
             Ok(())
         },
     },
-    FramePass {
+    build surface: Option<SurfacePass> = |b| {
+        // Every later pass reads the surface buffer; this pass fills it where textures or
+        // vertex colours need it (else the passes use the triangle's).
+        let buf = b.gpu.buffer(
+            "surface",
+            bytes::<Surface>(b.grid_pixels()),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let s = SurfacePass::new(
+            b.gpu,
+            &b.textures,
+            &b.shared.params,
+            &b.shared.tris,
+            (b.view("gbuffer")?, &buf),
+        );
+        b.write("surface", &buf)?;
+        Ok(s)
+    };
+    pass FramePass {
         name: "surface",
+        tables: &[&crate::gpu::surface::PASS],
         files: "`gpu/surface.rs`, `shaders/surface.wgsl`",
         when: "scenes with textures or vertex colours",
         reads: &["gbuffer", "tris", "textures"],
         writes: &["surface"],
         what: "each sample's textured albedo and emission (the other scenes use the triangle's)",
-        runs: |r| r.surface.is_some(),
+        runs: |r| r.passes.surface.is_some(),
         encode: |r, enc, _| {
             let (gw, gh) = r.config.grid();
-            if let Some(s) = &r.surface {
+            if let Some(s) = &r.passes.surface {
                 s.encode(enc, gw, gh);
             }
             Ok(())
         },
     },
-    FramePass {
+    build shadows: ShadowMaps = |b| {
+        let (c, f) = (b.c, b.frame);
+        let s = ShadowMaps::new(
+            b.gpu,
+            (c.shadow_size, c.light_samples),
+            (f.tris.len() as u32, f.has_cutouts()),
+            &b.textures,
+            &b.shared.tris,
+        );
+        b.write_view("hemicubes", &s.array_view)?;
+        Ok(s)
+    };
+    pass FramePass {
         name: "shadow_maps",
+        tables: &[&crate::gpu::shadow::PASS],
         files: "`gpu/shadow.rs`, `shaders/shadow.wgsl`",
         when: "always (kept while the geometry and emitter samples are the same)",
         reads: &["vertices", "lights"],
@@ -103,8 +145,23 @@ pub const GRAPH: [FramePass; 11] = [
             Ok(())
         },
     },
-    FramePass {
+    build direct: Direct = |b| {
+        let sh = b.shared;
+        let d = Direct::new(
+            b.gpu,
+            &sh.params,
+            &sh.tris,
+            &sh.lights,
+            b.view("hemicubes")?,
+            (b.view("gbuffer")?, b.buffer("surface")?),
+            b.grid_pixels(),
+        );
+        b.write("direct", &d.output)?;
+        Ok(d)
+    };
+    pass FramePass {
         name: "direct",
+        tables: &[&crate::gpu::direct::PASS],
         files: "`gpu/direct.rs`, `shaders/direct.wgsl`",
         when: "always",
         reads: &["gbuffer", "surface", "tris", "lights", "hemicubes"],
@@ -113,12 +170,29 @@ pub const GRAPH: [FramePass; 11] = [
         runs: always,
         encode: |r, enc, _| {
             let (gw, gh) = r.config.grid();
-            r.direct.encode(enc, gw, gh);
+            r.passes.direct.encode(enc, gw, gh);
             Ok(())
         },
     },
-    FramePass {
+    build ism: Ism = |b| {
+        let (c, sh) = (b.c, b.shared);
+        let ism = Ism::new(
+            b.gpu,
+            &sh.params,
+            &sh.tris,
+            &sh.points,
+            &sh.vpls,
+            &sh.slots,
+            c.slots,
+            c.ism_size,
+            c.pull_levels,
+        );
+        b.write("ism pyramid", &ism.pyramid)?;
+        Ok(ism)
+    };
+    pass FramePass {
         name: "ism_splat",
+        tables: &[&crate::gpu::ism::SPLAT],
         files: "`gpu/ism.rs`, `shaders/ism_splat.wgsl`",
         when: "always (only the slots whose VPL or geometry changed)",
         reads: &["tris", "points", "vpls", "slots"],
@@ -127,12 +201,13 @@ pub const GRAPH: [FramePass; 11] = [
         runs: always,
         encode: |r, enc, f| {
             let points = r.config.ism_points + r.near_points(f.input);
-            r.ism.encode_splat(enc, f.changed_slots, points);
+            r.passes.ism.encode_splat(enc, f.changed_slots, points);
             Ok(())
         },
     },
-    FramePass {
+    pass FramePass {
         name: "ism_pullpush",
+        tables: &[&crate::gpu::ism::PULL_PUSH],
         files: "`gpu/ism.rs`, `shaders/ism_pullpush.wgsl`",
         when: "always (only the redrawn slots)",
         reads: &["ism atlas"],
@@ -140,12 +215,27 @@ pub const GRAPH: [FramePass; 11] = [
         what: "holes filled within each tile up to 2^levels texels (levels 0 and 1 of the pyramid); tiles of at most 64 texels in one fused dispatch that also empties the atlas",
         runs: always,
         encode: |r, enc, f| {
-            r.ism.encode_pull_push(enc, f.changed_slots);
+            r.passes.ism.encode_pull_push(enc, f.changed_slots);
             Ok(())
         },
     },
-    FramePass {
+    build gather: Gather = |b| {
+        let sh = b.shared;
+        let g = Gather::new(
+            b.gpu,
+            &sh.params,
+            &sh.tris,
+            &sh.vpls,
+            b.buffer("ism pyramid")?,
+            (b.view("gbuffer")?, b.buffer("surface")?),
+            b.grid_pixels(),
+        );
+        b.write("indirect", &g.output)?;
+        Ok(g)
+    };
+    pass FramePass {
         name: "gather",
+        tables: &[&crate::gpu::gather::PASS],
         files: "`gpu/gather.rs`, `shaders/gather.wgsl`",
         when: "always",
         reads: &["gbuffer", "surface", "tris", "vpls", "ism pyramid"],
@@ -154,73 +244,160 @@ pub const GRAPH: [FramePass; 11] = [
         runs: always,
         encode: |r, enc, _| {
             let (iw, ih) = r.indirect_size();
-            r.gather.encode(enc, (iw, ih), r.config.interleave);
+            r.passes.gather.encode(enc, (iw, ih), r.config.interleave);
             Ok(())
         },
     },
-    FramePass {
+    build interleave: Option<Interleave> = |b| {
+        if b.c.interleave <= 1 {
+            return Ok(None);
+        }
+        let i = Interleave::new(
+            b.gpu,
+            &b.shared.params,
+            &b.shared.tris,
+            (b.view("gbuffer")?, b.buffer("surface")?),
+            b.buffer("indirect")?,
+            b.grid_pixels(),
+        );
+        b.write("indirect", &i.output)?;
+        Ok(Some(i))
+    };
+    pass FramePass {
         name: "interleave",
+        tables: &[&crate::gpu::interleave::PASS],
         files: "`gpu/interleave.rs`, `shaders/interleave.wgsl`",
         when: "`--interleave n > 1`",
         reads: &["gbuffer", "surface", "tris", "indirect"],
         writes: &["indirect"],
         what: "the depth- and normal-aware mean of the subsets over the pixel's block (docs/math.md)",
-        runs: |r| r.interleave.is_some(),
+        runs: |r| r.passes.interleave.is_some(),
         encode: |r, enc, _| {
             let (iw, ih) = r.indirect_size();
-            if let Some(p) = &r.interleave {
+            if let Some(p) = &r.passes.interleave {
                 p.encode(enc, iw, ih);
             }
             Ok(())
         },
     },
-    FramePass {
+    build temporal: Option<Temporal> = |b| {
+        let c = b.c;
+        if c.accumulate <= 1 {
+            return Ok(None);
+        }
+        // The pixels' samples are tile 0's: rows 0..height of the grid.
+        let tile0 = c.grid().0 as u64 * c.height as u64;
+        check_size(
+            &b.gpu.limits,
+            &format!("the history of {}x{} samples (`accumulate`)", c.grid().0, c.height),
+            bytes::<HistorySample>(tile0),
+            "lower `size` or `aa`, or drop `accumulate`",
+        )?;
+        let t = Temporal::new(
+            b.gpu,
+            &b.shared.params,
+            &b.shared.tris,
+            b.view("gbuffer")?,
+            b.buffer("indirect")?,
+            tile0,
+            c.accumulate,
+        );
+        b.write("indirect", &t.output)?;
+        Ok(Some(t))
+    };
+    pass FramePass {
         name: "temporal",
+        tables: &[&crate::gpu::temporal::PASS],
         files: "`gpu/temporal.rs`, `shaders/temporal.wgsl`",
         when: "`--accumulate N > 1`",
         reads: &["gbuffer", "tris", "indirect", "history"],
         writes: &["indirect", "history"],
         what: "the indirect light as the running mean of up to N frames' estimates of the pixel's surface point, while the triangles and emitter samples stay the same",
-        runs: |r| r.temporal.is_some(),
+        runs: |r| r.passes.temporal.is_some(),
         encode: |r, enc, _| {
             let (iw, ih) = r.indirect_size();
-            if let Some(t) = &mut r.temporal {
+            if let Some(t) = &mut r.passes.temporal {
                 t.encode(enc, iw, ih);
             }
             Ok(())
         },
     },
-    FramePass {
+    build compose: Compose = |b| {
+        let supersampled = b.c.aa > 1;
+        let p = Compose::new(
+            b.gpu,
+            &b.shared.params,
+            &b.shared.tris,
+            (b.view("gbuffer")?, b.buffer("surface")?),
+            (b.buffer("direct")?, b.buffer("indirect")?),
+            b.grid_pixels(),
+            supersampled,
+        );
+        b.write("hdr", &p.hdr)?;
+        b.write("ldr", &p.ldr)?;
+        if supersampled {
+            b.write("indirect sub-samples", &p.indirect_ss)?;
+        }
+        Ok(p)
+    };
+    pass FramePass {
         name: "compose",
+        tables: &[&crate::gpu::compose::PASS],
         files: "`gpu/compose.rs`, `shaders/compose.wgsl`",
         when: "always",
         reads: &["gbuffer", "surface", "tris", "direct", "indirect"],
-        writes: &["hdr", "ldr"],
-        what: "emission + direct + indirect (linear), and the 8-bit preview; supersampled, each sub-sample's indirect light from its pixel's, times its albedo, and no preview",
+        writes: &["hdr", "ldr", "indirect sub-samples"],
+        what: "emission + direct + indirect (linear), and the 8-bit preview; supersampled, each sub-sample's indirect light from its pixel's, times its albedo (`indirect sub-samples`), and no preview",
         runs: always,
         encode: |r, enc, _| {
             let (gw, gh) = r.config.grid();
-            r.compose.encode(enc, gw, gh);
+            r.passes.compose.encode(enc, gw, gh);
             Ok(())
         },
     },
-    FramePass {
+    build downsample: Option<Downsample> = |b| {
+        let c = b.c;
+        if c.aa <= 1 {
+            return Ok(None);
+        }
+        let d = Downsample::new(
+            b.gpu,
+            &b.shared.params,
+            (
+                b.buffer("hdr")?,
+                b.buffer("direct")?,
+                b.buffer("indirect sub-samples")?,
+            ),
+            c.width as u64 * c.height as u64,
+        );
+        for (name, buf) in [
+            ("hdr", &d.hdr),
+            ("ldr", &d.ldr),
+            ("direct", &d.direct),
+            ("indirect", &d.indirect),
+        ] {
+            b.write(name, buf)?;
+        }
+        Ok(Some(d))
+    };
+    pass FramePass {
         name: "downsample",
+        tables: &[&crate::gpu::downsample::PASS],
         files: "`gpu/downsample.rs`, `shaders/downsample.wgsl`",
         when: "`--aa S > 1`",
-        reads: &["hdr", "direct", "indirect"],
+        reads: &["hdr", "direct", "indirect sub-samples"],
         writes: &["hdr", "ldr", "direct", "indirect"],
         what: "the box filter of each pixel's S^2 sub-samples",
-        runs: |r| r.downsample.is_some(),
+        runs: |r| r.passes.downsample.is_some(),
         encode: |r, enc, _| {
             let c = &r.config;
-            if let Some(p) = &r.downsample {
+            if let Some(p) = &r.passes.downsample {
                 p.encode(enc, c.width, c.height);
             }
             Ok(())
         },
     },
-];
+}
 
 /// The pass table of `docs/design.md`, from [`GRAPH`].
 pub fn pass_table() -> String {
@@ -272,6 +449,36 @@ mod tests {
             want,
             "docs/design.md's pass table differs from gpu::graph::GRAPH: IRAD_BLESS=1 cargo test --release --lib pass_table rewrites it"
         );
+    }
+
+    /// A pass's build may read only what its entry declares, and write what its entry or the
+    /// entries sharing its state declare: the builder refuses the rest.
+    #[test]
+    fn builds_use_only_declared_resources() {
+        use super::super::build::declared;
+        let at = |name: &str| GRAPH.iter().position(|p| p.name == name).unwrap();
+        let (splat, gather) = (at("ism_splat"), at("gather"));
+        assert!(declared(&GRAPH[gather..gather + 1], "ism pyramid", "reads").is_ok());
+        let e = declared(&GRAPH[gather..gather + 1], "hdr", "reads").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "the renderer's pass `gather` uses `hdr`, which its graph entry does not list in `reads`"
+        );
+        assert!(declared(&GRAPH[gather..gather + 1], "direct", "writes").is_err());
+        // ism_splat's state is ism_pullpush's too: the pyramid is written by the pair.
+        assert!(declared(&GRAPH[splat..splat + 1], "ism pyramid", "writes").is_err());
+        assert!(declared(&GRAPH[splat..splat + 2], "ism pyramid", "writes").is_ok());
+        // Exactly the entries with state of their own build (ism_pullpush shares splat's).
+        let built: Vec<&str> = GRAPH
+            .iter()
+            .zip(BUILDS)
+            .filter(|p| p.1)
+            .map(|p| p.0.name)
+            .collect();
+        assert_eq!(built.len(), GRAPH.len() - 1);
+        assert!(!built.contains(&"ism_pullpush"));
+        // And each entry names its binding tables, which `gpu::bindings` checks.
+        assert!(GRAPH.iter().all(|p| !p.tables.is_empty()));
     }
 
     /// Every pass reads only what an earlier pass (or the upload) wrote, and the names are

@@ -6,18 +6,17 @@
 
 mod build;
 pub mod graph;
+pub mod pass;
 
 pub use build::check_config;
-use build::{Passes, Shared};
+use build::{Builder, Outputs, Shared};
+use graph::Passes;
 
 use super::bindings::bytes;
 use super::common::{FrameConstants, GpuEmitterSample, GpuVpl, Tri};
 use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
-use super::{
-    compose::Compose, direct::Direct, downsample::Downsample, gather::Gather, gbuffer::GBuffer,
-    interleave::Interleave, ism, shadow::ShadowMaps, temporal::Temporal, Gpu,
-};
+use super::{ism, Gpu};
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
 use crate::vpl::ShadedVpl;
@@ -216,22 +215,13 @@ pub struct Renderer {
     vertices: wgpu::Buffer,
     vpls: wgpu::Buffer,
     lights: wgpu::Buffer,
-    pub(crate) gbuffer: GBuffer,
-    /// Each sample's albedo and emission (scenes with textures or vertex colours).
-    pub(crate) surface: Option<super::surface::SurfacePass>,
-    pub(crate) shadows: ShadowMaps,
-    pub(crate) direct: Direct,
-    pub(crate) ism: ism::Ism,
-    pub(crate) gather: Gather,
-    /// The interleaved gather's filter (`interleave > 1`).
-    pub(crate) interleave: Option<Interleave>,
+    /// The passes' GPU state, built in the order of [`GRAPH`].
+    pub(crate) passes: Passes,
+    /// The buffers read back: what the last passes that write `hdr`, `ldr`, `direct` and
+    /// `indirect` leave there.
+    outputs: Outputs,
     /// The interleave pattern's shift in x and y (from the seed; each below `interleave`).
     pub interleave_shift: (u32, u32),
-    /// Temporal accumulation of the indirect light (`accumulate > 1`).
-    pub(crate) temporal: Option<Temporal>,
-    pub(crate) compose: Compose,
-    /// The box filter of the sub-samples into pixels (`aa > 1`).
-    pub(crate) downsample: Option<Downsample>,
 }
 
 impl Renderer {
@@ -245,7 +235,9 @@ impl Renderer {
         check_config(&config, &gpu.limits)?;
         let c = &config;
         let b = Shared::new(&gpu, c, points_frame)?;
-        let p = Passes::new(&gpu, c, points_frame, &b)?;
+        let mut builder = Builder::new(&gpu, c, points_frame, &b)?;
+        let passes = Passes::new(&mut builder)?;
+        let outputs = builder.outputs()?;
         // The interleave pattern's shift, from the seed.
         let h = crate::math::mix64(c.seed ^ 0x1e7e_a5ed_0000_0009);
         let interleave_shift = (
@@ -274,17 +266,9 @@ impl Renderer {
             vertices: b.vertices,
             vpls: b.vpls,
             lights: b.lights,
-            gbuffer: p.gbuffer,
-            surface: p.surface,
-            shadows: p.shadows,
-            direct: p.direct,
-            ism: p.ism,
-            gather: p.gather,
-            interleave: p.interleave,
+            passes,
+            outputs,
             interleave_shift,
-            temporal: p.temporal,
-            compose: p.compose,
-            downsample: p.downsample,
         })
     }
 
@@ -364,7 +348,7 @@ impl Renderer {
                 })
                 .collect();
             q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
-            self.shadows.upload(&self.gpu, &f.tris);
+            self.passes.shadows.upload(&self.gpu, &f.tris);
             self.last.tris = tris;
         }
         same_bits
@@ -452,7 +436,7 @@ impl Renderer {
         let same_lights = self.upload_lights(f, input.emitter_samples);
         let lights_kept = self.reuse && same_lights;
         // The history holds while the light is the same: same triangles, same emitter samples.
-        let history_kept = if let Some(t) = &mut self.temporal {
+        let history_kept = if let Some(t) = &mut self.passes.temporal {
             let offset = super::gbuffer::subsample(0, 0, self.config.aa);
             t.upload(&self.gpu, view_proj, offset, same_tris && same_lights)
         } else {
@@ -484,13 +468,13 @@ impl Renderer {
             shift_y: self.interleave_shift.1 % c.interleave,
             aa: c.aa,
             near_points,
-            textured: self.surface.is_some() as u32,
+            textured: self.passes.surface.is_some() as u32,
             near_grid: if near_points > 0 {
                 ism::near_grid(c.ism_size, c.pull_levels)
             } else {
                 0
             },
-            ism_level1: self.ism.level1(),
+            ism_level1: self.passes.ism.level1(),
         };
         self.gpu
             .queue
@@ -510,7 +494,7 @@ impl Renderer {
     /// Records the frame's passes in the order of [`GRAPH`], those that run in this renderer.
     /// Returns whether the shadow maps were kept, what the raster passes drew, and the names
     /// of the passes recorded.
-    fn encode_passes(&mut self, rec: &mut Recorder, f: &mut graph::Frame) -> Result<(bool, Drawn)> {
+    fn encode_passes(&mut self, rec: &mut Recorder, f: &mut pass::Frame) -> Result<(bool, Drawn)> {
         for p in &GRAPH {
             if p.runs(self) {
                 p.encode(self, &mut rec.enc, f)?;
@@ -533,7 +517,7 @@ impl Renderer {
     }
 
     /// gbuffer: what the camera sees of the frame's instances, drawn into the G-buffer.
-    pub(crate) fn encode_gbuffer(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
+    pub(crate) fn encode_gbuffer(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut pass::Frame) {
         let c = &self.config;
         let tris = self.tri_count as u32;
         let instances = self.instances(f.input.frame);
@@ -544,14 +528,15 @@ impl Renderer {
         let (all, front) = crate::scene::culling::counts(&runs);
         f.drawn.triangles = tris as u64;
         (f.drawn.gbuffer_triangles, f.drawn.gbuffer_front_only) = (all, front);
-        self.gbuffer
+        self.passes
+            .gbuffer
             .encode(&self.gpu, enc, &self.vertices, &runs, (f.view_proj, skip));
     }
 
     /// shadow_maps: the emitter samples' hemicube faces (kept while the geometry is still).
-    pub(crate) fn encode_shadows(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut graph::Frame) {
+    pub(crate) fn encode_shadows(&mut self, enc: &mut wgpu::CommandEncoder, f: &mut pass::Frame) {
         let instances = self.instances(f.input.frame);
-        f.shadows_drawn = self.shadows.encode(
+        f.shadows_drawn = self.passes.shadows.encode(
             &self.gpu,
             enc,
             (f.input.emitter_samples, &self.last.lit),
@@ -561,7 +546,7 @@ impl Renderer {
             !f.geometry_kept,
         );
         let d = &mut f.drawn;
-        (d.shadow_faces, d.shadow_triangles, d.shadow_front_only) = self.shadows.drawn;
+        (d.shadow_faces, d.shadow_triangles, d.shadow_front_only) = self.passes.shadows.drawn;
     }
 
     /// The size the indirect light is gathered at: supersampled, one sample per pixel (tile
@@ -573,23 +558,6 @@ impl Renderer {
         } else {
             c.grid()
         }
-    }
-
-    /// The indirect light the passes leave: the output of the last pass of [`GRAPH`] that
-    /// writes `indirect` and runs here.
-    fn indirect(&self) -> &wgpu::Buffer {
-        let output = |name: &str| match name {
-            "gather" => Some(&self.gather.output),
-            "interleave" => self.interleave.as_ref().map(|p| &p.output),
-            "temporal" => self.temporal.as_ref().map(|p| &p.output),
-            _ => None,
-        };
-        GRAPH
-            .iter()
-            .rev()
-            .filter(|p| p.writes.contains(&"indirect"))
-            .find_map(|p| output(p.name))
-            .unwrap_or(&self.gather.output)
     }
 
     /// Copies the outputs into the staging buffers in the frame's submission, submits, and
@@ -607,15 +575,8 @@ impl Renderer {
         let (hdr_bytes, ldr_bytes) = (bytes::<[f32; 4]>(pixels), bytes::<u32>(pixels));
         let st = &self.staging;
         // The frame and its parts at the output size: resolved, or (aa = 1) as composed.
-        let (hdr, ldr, direct, indirect) = match &self.downsample {
-            Some(r) => (&r.hdr, &r.ldr, &r.direct, &r.indirect),
-            None => (
-                &self.compose.hdr,
-                &self.compose.ldr,
-                &self.direct.output,
-                self.indirect(),
-            ),
-        };
+        let o = &self.outputs;
+        let (hdr, ldr, direct, indirect) = (&o.hdr, &o.ldr, &o.direct, &o.indirect);
         let mut reads = vec![(hdr, &st.hdr, hdr_bytes)];
         reads.push((ldr, &st.ldr, ldr_bytes));
         if components {
@@ -679,7 +640,7 @@ impl Renderer {
         let (gpu, timestamps) = (self.gpu.clone(), self.timestamps.take());
         let recorded = (|| {
             let mut rec = Recorder::new(&gpu, self.profiling, timestamps.as_ref());
-            let mut f = graph::Frame {
+            let mut f = pass::Frame {
                 input,
                 changed_slots: changed.len() as u32,
                 geometry_kept: reuse.geometry_kept,
@@ -697,10 +658,10 @@ impl Renderer {
         if recorded.is_err() {
             // This frame's history, ISM tiles and shadow maps may not have been written: the
             // next frame starts anew (uploads and redraws everything).
-            if let Some(t) = &mut self.temporal {
+            if let Some(t) = &mut self.passes.temporal {
                 t.forget();
             }
-            self.ism.forget();
+            self.passes.ism.forget();
             self.last = Last::default();
         }
         let (kept, drawn, (hdr, ldr, parts, pass_s)) = recorded?;
