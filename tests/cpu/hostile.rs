@@ -4,8 +4,12 @@
 use crate::scene_files::{lit, load};
 use base64::Engine;
 use irad::reference::{self, ReferenceSettings};
+use irad::scene::load::load_path;
+use irad::scene::Scene;
 use irad::trace::Tracer;
 use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
 
 /// A PNG of `w x h` RGBA texels (row 0 at the top).
 fn png(w: u32, h: u32, texels: &[[u8; 4]]) -> Vec<u8> {
@@ -63,4 +67,77 @@ fn an_emitter_the_emitter_list_misses_does_not_panic_the_reference() {
     // The camera sees the floor's white texels (emission 1) plus light reflected off them.
     let brightest = img.data.iter().map(|p| p.min_element()).fold(0.0, f32::max);
     assert!(brightest > 1.0, "brightest pixel {brightest}");
+}
+
+/// Loads a scene file, failing the test if loading takes more than 10 s.
+fn load_file(path: &Path) -> Result<Scene, String> {
+    let start = Instant::now();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let path = path.to_path_buf();
+    std::thread::spawn(move || {
+        let _ = tx.send(load_path(&path).map_err(|e| e.to_string()));
+    });
+    let r = rx
+        .recv_timeout(Duration::from_secs(10))
+        .expect("loading hung (or panicked)");
+    assert!(start.elapsed() < Duration::from_secs(10));
+    r
+}
+
+/// A fresh folder for one test's files.
+fn folder(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("irad-hostile-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The lit quad with its buffer in a file `bin` beside it, as (document, buffer bytes).
+fn lit_with_external_buffer() -> (serde_json::Value, Vec<u8>) {
+    let (g, doc) = lit();
+    let doc = g.finish(doc);
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let bin = base64::engine::general_purpose::STANDARD
+        .decode(uri.split_once(',').unwrap().1)
+        .unwrap();
+    (doc, bin)
+}
+
+/// Issue 24 item 2: a buffer URI or a scene path naming /dev/zero grew past 4 GB in 10 s.
+/// Both are refused at once, naming the file, because it is not a regular file.
+#[test]
+fn dev_zero_as_buffer_or_scene_is_refused_at_once() {
+    let dir = folder("dev-zero");
+    let (mut doc, _) = lit_with_external_buffer();
+    doc["buffers"][0]["uri"] = json!("/dev/zero");
+    let path = dir.join("zero.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let e = load_file(&path).unwrap_err();
+    assert!(e.contains("zero.gltf") && e.contains("/dev/zero"), "{e}");
+    assert!(e.contains("not a regular file"), "{e}");
+    let e = load_file(Path::new("/dev/zero")).unwrap_err();
+    assert!(
+        e.starts_with("/dev/zero: ") && e.contains("not a regular file"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A buffer file longer than its `byteLength` loads (only the declared bytes are read), and
+/// one shorter is refused as short.
+#[test]
+fn a_buffer_file_is_read_up_to_its_byte_length() {
+    let dir = folder("byte-length");
+    let (mut doc, mut bin) = lit_with_external_buffer();
+    let declared = bin.len();
+    doc["buffers"][0]["uri"] = json!("lit.bin");
+    let path = dir.join("lit.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    bin.extend(std::iter::repeat_n(0xffu8, 1 << 20));
+    std::fs::write(dir.join("lit.bin"), &bin).unwrap();
+    assert_eq!(load_file(&path).unwrap().at(0.0).tris.len(), 4);
+    std::fs::write(dir.join("lit.bin"), &bin[..declared - 4]).unwrap();
+    let e = load_file(&path).unwrap_err();
+    assert!(e.contains("buffer 0 is short"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

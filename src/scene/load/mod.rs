@@ -11,6 +11,7 @@
 mod animation;
 mod buffers;
 mod camera;
+pub mod files;
 mod lights;
 mod material;
 mod mesh;
@@ -71,9 +72,9 @@ impl Ctx<'_> {
 /// Loads a scene from a file path.
 pub fn load_path(path: &Path) -> Result<Scene, LoadError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| LoadError {
+    let bytes = files::read_scene(path).map_err(|e| LoadError {
         file: file.clone(),
-        reason: format!("cannot read the file: {e}"),
+        reason: format!("the scene file {e}"),
     })?;
     let name = path
         .file_stem()

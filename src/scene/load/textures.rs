@@ -4,9 +4,8 @@
 //! it, and the materials that use it fall back to their factors.
 
 use super::buffers::Buffers;
-use super::Ctx;
+use super::{files, Ctx};
 use crate::scene::texture::{Filter, Texture, Wrap, MAX_SIDE};
-use base64::Engine;
 use gltf::texture::{MagFilter, WrappingMode};
 use std::path::Path;
 
@@ -86,32 +85,26 @@ fn decode(
             }
         }
         (None, Some(uri)) => {
-            if let Some(rest) = uri.strip_prefix("data:") {
-                let Some((_, b64)) = rest.split_once(";base64,") else {
-                    return fail(cx, "has a data: URI that is not base64".into());
-                };
-                match base64::engine::general_purpose::STANDARD.decode(b64.trim()) {
+            if let Some(d) = files::data_uri(uri) {
+                match d {
                     Ok(b) => b,
-                    Err(e) => return fail(cx, format!("has a data: URI that is not base64 ({e})")),
+                    Err(e) => return fail(cx, e),
                 }
-            } else if uri.contains(':') {
-                return fail(
-                    cx,
-                    format!("refers to '{uri}', which is not a relative file path"),
-                );
             } else {
-                let Ok(name) = urlencoding::decode(uri) else {
-                    return fail(
-                        cx,
-                        format!("has the URI '{uri}', which does not percent-decode"),
-                    );
+                let path = match files::resolve(base.unwrap_or(Path::new(".")), uri) {
+                    Ok(p) => p,
+                    Err(e) => return fail(cx, e),
                 };
-                let path = base.unwrap_or(Path::new(".")).join(&*name);
-                match std::fs::read(&path) {
-                    Ok(b) => b,
-                    Err(e) => {
-                        return fail(cx, format!("file {} cannot be read ({e})", path.display()))
+                let limit = files::MAX_IMAGE_BYTES;
+                match files::read_regular(&path, limit + 1) {
+                    Ok(b) if b.len() as u64 > limit => {
+                        return fail(
+                            cx,
+                            format!("file {} is larger than {} MiB", path.display(), limit >> 20),
+                        )
                     }
+                    Ok(b) => b,
+                    Err(e) => return fail(cx, format!("file {} {e}", path.display())),
                 }
             }
         }
