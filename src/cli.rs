@@ -45,6 +45,9 @@ pub enum Command {
         /// motion warp must see the scene from the same camera)
         #[arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")]
         camera: Option<config::CameraSpec>,
+        /// With --scene: let a glTF scene read files outside its own folder
+        #[arg(long)]
+        allow_outside_paths: bool,
     },
     /// Print the graphics adapters found and the one irad chooses
     Info {
@@ -59,6 +62,10 @@ pub enum Command {
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
         #[arg(long)]
         generate: Option<PathBuf>,
+        /// Let a glTF scene read buffer and image files outside its own folder (absolute
+        /// URIs, `..`, symbolic links leading out); refused by default
+        #[arg(long)]
+        allow_outside_paths: bool,
     },
 }
 
@@ -137,6 +144,7 @@ pub fn run(cli: Cli) -> Result<()> {
             scene,
             fps,
             camera,
+            allow_outside_paths,
         } => {
             commands::metrics::metrics(&test, &reference, out.as_deref())?;
             match scene {
@@ -147,14 +155,25 @@ pub fn run(cli: Cli) -> Result<()> {
                     fps,
                     camera.as_ref(),
                     out.as_deref(),
+                    &crate::scene::load::LoadOptions {
+                        allow_outside_paths,
+                    },
                 ),
                 None => Ok(()),
             }
         }
         Command::Info { backend } => commands::info(backend),
-        Command::Scenes { scene, generate } => {
-            commands::scenes(scene.as_deref(), generate.as_deref())
-        }
+        Command::Scenes {
+            scene,
+            generate,
+            allow_outside_paths,
+        } => commands::scenes(
+            scene.as_deref(),
+            generate.as_deref(),
+            &crate::scene::load::LoadOptions {
+                allow_outside_paths,
+            },
+        ),
     }
 }
 

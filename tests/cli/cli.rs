@@ -536,3 +536,47 @@ fn a_newcomers_slips_get_plain_answers() {
         "{text}"
     );
 }
+
+/// Issue 24 item 3: a scene whose buffer lies outside its folder is refused by every command
+/// that loads scenes, naming the URI and `--allow-outside-paths`, which lets it load.
+#[test]
+fn a_buffer_outside_the_scene_folder_needs_allow_outside_paths() {
+    use base64::Engine;
+    let top = tmp("outside");
+    let dir = top.join("scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.gltf"))
+        .unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let bin = base64::engine::general_purpose::STANDARD
+        .decode(uri.split_once(',').unwrap().1)
+        .unwrap();
+    std::fs::write(top.join("outside.bin"), bin).unwrap();
+    doc["buffers"][0]["uri"] = serde_json::json!("../outside.bin");
+    let scene = dir.join("s.gltf");
+    std::fs::write(&scene, doc.to_string()).unwrap();
+    let scene = scene.to_str().unwrap();
+    let out = top.join("out");
+    let out = out.to_str().unwrap();
+    let reference = [
+        "reference",
+        scene,
+        "--size",
+        "4x4",
+        "--spp",
+        "1",
+        "--out",
+        out,
+    ];
+    for args in [&["scenes", scene][..], &reference[..]] {
+        let o = irad(args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(e.contains("buffer 0 refers to '../outside.bin'"), "{e}");
+        assert!(e.contains("--allow-outside-paths"), "{e}");
+        let o = irad(&[args, &["--allow-outside-paths"]].concat());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {e}");
+    }
+}

@@ -4,7 +4,7 @@
 use crate::scene_files::{lit, load};
 use base64::Engine;
 use irad::reference::{self, ReferenceSettings};
-use irad::scene::load::load_path;
+use irad::scene::load::{load_path, load_path_with, LoadOptions};
 use irad::scene::Scene;
 use irad::trace::Tracer;
 use serde_json::json;
@@ -71,11 +71,19 @@ fn an_emitter_the_emitter_list_misses_does_not_panic_the_reference() {
 
 /// Loads a scene file, failing the test if loading takes more than 10 s.
 fn load_file(path: &Path) -> Result<Scene, String> {
+    load_file_with(path, false)
+}
+
+/// [`load_file`], reading files outside the scene's folder when `outside`.
+fn load_file_with(path: &Path, outside: bool) -> Result<Scene, String> {
     let start = Instant::now();
     let (tx, rx) = std::sync::mpsc::channel();
     let path = path.to_path_buf();
     std::thread::spawn(move || {
-        let _ = tx.send(load_path(&path).map_err(|e| e.to_string()));
+        let options = LoadOptions {
+            allow_outside_paths: outside,
+        };
+        let _ = tx.send(load_path_with(&path, &options).map_err(|e| e.to_string()));
     });
     let r = rx
         .recv_timeout(Duration::from_secs(10))
@@ -112,10 +120,11 @@ fn dev_zero_as_buffer_or_scene_is_refused_at_once() {
     doc["buffers"][0]["uri"] = json!("/dev/zero");
     let path = dir.join("zero.gltf");
     std::fs::write(&path, doc.to_string()).unwrap();
-    let e = load_file(&path).unwrap_err();
+    // Refused as outside the folder by default; allowed, as not a regular file.
+    let e = load_file_with(&path, true).unwrap_err();
     assert!(e.contains("zero.gltf") && e.contains("/dev/zero"), "{e}");
     assert!(e.contains("not a regular file"), "{e}");
-    let e = load_file(Path::new("/dev/zero")).unwrap_err();
+    let e = load_path(Path::new("/dev/zero")).unwrap_err().to_string();
     assert!(
         e.starts_with("/dev/zero: ") && e.contains("not a regular file"),
         "{e}"
@@ -139,5 +148,84 @@ fn a_buffer_file_is_read_up_to_its_byte_length() {
     std::fs::write(dir.join("lit.bin"), &bin[..declared - 4]).unwrap();
     let e = load_file(&path).unwrap_err();
     assert!(e.contains("buffer 0 is short"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Issue 24 item 3: buffer and image URIs that are absolute or lead out of the scene's folder
+/// (by `..` or a symbolic link) are refused, naming the URI, the scene file and the option;
+/// allowed, they load.
+#[test]
+fn files_outside_the_scene_folder_are_refused_unless_allowed() {
+    let top = folder("outside");
+    let dir = top.join("scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (mut doc, bin) = lit_with_external_buffer();
+    std::fs::write(top.join("outside.bin"), &bin).unwrap();
+    std::os::unix::fs::symlink(top.join("outside.bin"), dir.join("link.bin")).unwrap();
+    let path = dir.join("s.gltf");
+    let outside = top.join("outside.bin").display().to_string();
+    for uri in [
+        "/etc/passwd",
+        "../outside.bin",
+        "link.bin",
+        outside.as_str(),
+    ] {
+        doc["buffers"][0]["uri"] = json!(uri);
+        std::fs::write(&path, doc.to_string()).unwrap();
+        let e = load_file(&path).unwrap_err();
+        assert!(
+            e.starts_with(&format!("{}: buffer 0 refers to '{uri}'", path.display())),
+            "{e}"
+        );
+        assert!(e.contains("`allow_outside_paths`"), "{e}");
+        if uri != "/etc/passwd" {
+            assert_eq!(
+                load_file_with(&path, true).unwrap().at(0.0).tris.len(),
+                4,
+                "{uri}"
+            );
+        }
+    }
+    // A file inside the folder, and one reached by `..` that stays inside, load.
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::write(dir.join("in.bin"), &bin).unwrap();
+    doc["buffers"][0]["uri"] = json!("sub/../in.bin");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    assert_eq!(load_file(&path).unwrap().at(0.0).tris.len(), 4);
+    // An image outside is refused too (an error, not a warning with the texture dropped).
+    doc["buffers"][0]["uri"] = json!("in.bin");
+    doc["images"] = json!([{ "uri": "../picture.png" }]);
+    std::fs::write(top.join("picture.png"), png(1, 1, &[[9, 9, 9, 255]])).unwrap();
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let e = load_file(&path).unwrap_err();
+    assert!(e.contains("image 0 refers to '../picture.png'"), "{e}");
+    assert!(load_file_with(&path, true).is_ok());
+    std::fs::remove_dir_all(&top).unwrap();
+}
+
+/// A buffer file that is not geometry (text here) is refused without its bytes in the
+/// message: the loader once printed them back as vertex coordinates.
+#[test]
+fn a_malformed_buffer_is_refused_without_echoing_its_bytes() {
+    let dir = folder("echo");
+    let (mut doc, bin) = lit_with_external_buffer();
+    let text: Vec<u8> = b"root:x:0:0:secret-password-here:/root:/bin/bash\n"
+        .iter()
+        .copied()
+        .cycle()
+        .take(bin.len())
+        .collect();
+    std::fs::write(dir.join("text.bin"), &text).unwrap();
+    doc["buffers"][0]["uri"] = json!("text.bin");
+    let path = dir.join("s.gltf");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let e = load_file(&path).unwrap_err();
+    assert!(e.contains("mesh 0"), "{e}");
+    let floats: &[f32] = bytemuck::cast_slice(&text[..48]);
+    for x in floats {
+        for shown in [format!("{x}"), format!("{x:e}"), format!("{:.3e}", x)] {
+            assert!(!e.contains(&shown), "{shown} (the file's bytes) in: {e}");
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

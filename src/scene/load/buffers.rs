@@ -34,8 +34,9 @@ pub(super) fn load(
             gltf::buffer::Source::Uri(uri) => match files::data_uri(uri) {
                 Some(d) => d.map_err(|e| cx.err(format!("{what} {e}")))?,
                 None => {
-                    let path =
-                        files::resolve(base, uri).map_err(|e| cx.err(format!("{what} {e}")))?;
+                    let path = files::resolve(base, uri)
+                        .and_then(|p| files::check_inside(base, uri, &cx.options).map(|_| p))
+                        .map_err(|e| cx.err(format!("{what} {e}")))?;
                     files::read_regular(&path, declared as u64).map_err(|e| {
                         cx.err(format!(
                             "{what} refers to '{uri}' ({}), which {e}",

@@ -108,3 +108,60 @@ pub(super) fn resolve(base: &Path, uri: &str) -> Result<PathBuf, String> {
         .map_err(|e| format!("has the URI '{uri}', which does not percent-decode to UTF-8: {e}"))?;
     Ok(base.join(&*decoded))
 }
+
+/// Whether the file a (relative, percent-encoded) URI `uri` names lies in `base` (the
+/// scene's folder) or below once symbolic links are resolved; an error saying where it leads
+/// if not, unless `options` allow that. A file that does not exist passes here when its path
+/// stays inside (reading it then says it is missing).
+pub(super) fn check_inside(base: &Path, uri: &str, options: &LoadOptions) -> Result<(), String> {
+    if options.allow_outside_paths {
+        return Ok(());
+    }
+    let base = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
+    let outside = |where_: String| {
+        format!(
+            "refers to '{uri}', {where_}: irad reads only files in the scene's folder and below unless `allow_outside_paths` is set"
+        )
+    };
+    let decoded = PathBuf::from(&*urlencoding::decode(uri).unwrap_or_default());
+    let path = base.join(&decoded);
+    if decoded.is_absolute() || decoded.has_root() {
+        return Err(outside("an absolute path".into()));
+    }
+    let (Ok(root), Ok(full)) = (base.canonicalize(), path.canonicalize()) else {
+        // Nothing to read there: the read says so. A path that climbs out is refused even so.
+        return match lexically_outside(&decoded) {
+            true => Err(outside("outside the scene's folder".into())),
+            false => Ok(()),
+        };
+    };
+    if full.starts_with(&root) {
+        Ok(())
+    } else {
+        Err(outside(format!(
+            "which leads to {}, outside the scene's folder {}",
+            full.display(),
+            root.display()
+        )))
+    }
+}
+
+/// Whether a relative path climbs above its start by its `..` alone.
+fn lexically_outside(p: &Path) -> bool {
+    let mut depth = 0i64;
+    for c in p.components() {
+        match c {
+            std::path::Component::ParentDir => depth -= 1,
+            std::path::Component::Normal(_) => depth += 1,
+            _ => {}
+        }
+        if depth < 0 {
+            return true;
+        }
+    }
+    false
+}

@@ -4,24 +4,36 @@
 //! it, and the materials that use it fall back to their factors.
 
 use super::buffers::Buffers;
-use super::{files, Ctx};
+use super::{files, Ctx, LoadError};
 use crate::scene::texture::{Filter, Texture, Wrap, MAX_SIDE};
 use gltf::texture::{MagFilter, WrappingMode};
 use std::path::Path;
 
-/// Every texture of the file by index (None: its image could not be read).
+/// Every texture of the file by index (None: its image could not be read). An image file
+/// outside the scene's folder is an error (unless the options allow it), not a warning.
 pub(super) fn read(
     cx: &mut Ctx,
     doc: &gltf::Document,
     buffers: &Buffers,
     base: Option<&Path>,
-) -> Vec<Option<Texture>> {
+) -> Result<Vec<Option<Texture>>, LoadError> {
+    for (i, img) in doc.as_json().images.iter().enumerate() {
+        let Some(uri) = img.uri.as_deref().filter(|u| !u.starts_with("data:")) else {
+            continue;
+        };
+        let dir = base.unwrap_or(Path::new("."));
+        if files::resolve(dir, uri).is_ok() {
+            files::check_inside(dir, uri, &cx.options)
+                .map_err(|e| cx.err(format!("image {i} {e}")))?;
+        }
+    }
     // Each image decoded once, however many textures share it.
     let images: Vec<Option<image::RgbaImage>> = doc
         .images()
         .map(|img| decode(cx, doc, &img, buffers, base))
         .collect();
-    doc.textures()
+    Ok(doc
+        .textures()
         .map(|t| {
             let img = images.get(t.source().index())?.as_ref()?;
             let s = t.sampler();
@@ -46,7 +58,7 @@ pub(super) fn read(
                 },
             })
         })
-        .collect()
+        .collect())
 }
 
 /// One image as RGBA8 (sRGB codes), at most [`MAX_SIDE`] on a side; None (with a warning
