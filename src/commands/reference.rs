@@ -68,8 +68,10 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     let spec = seq.scene_or(config::DEFAULT_STILL_SCENE);
     let scene = seq.load_scene(config::DEFAULT_STILL_SCENE)?;
     let out = &cfg.out;
-    report::prepare_run_dir(out)?;
     let frames = seq.frames_or_first();
+    let mut planned = report::run_files(frames.iter(), false);
+    planned.retain(|f| f != "preview.gif" && f != "frames.jsonl");
+    let dir = report::prepare_run_dir(out, planned, cfg.overwrite)?;
     let pb = report::progress(frames.len() as u64 * seq.size.height as u64, "reference");
     let mut record = ReferenceRun {
         command: "reference",
@@ -101,6 +103,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     )?;
     pb.finish_and_clear();
     report::write_json(&out.join("run.json"), &record)?;
+    dir.finish()?;
     for fr in &record.frames {
         crate::outln!(
             "frame {:4}  t={:.3}s  {:.2}s  mean RGB ({:.4}, {:.4}, {:.4})",

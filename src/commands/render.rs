@@ -147,9 +147,13 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
     // Sizes are checked against the adapter, and the folder for writing, before any frame.
     let mut pipeline = Pipeline::new(gpu, scene, cfg)?;
-    let out = &cfg.out;
-    report::prepare_run_dir(out)?;
     let (frames, note) = cfg.sequence.frames_or_all(pipeline.scene.duration());
+    let out = &cfg.out;
+    let dir = report::prepare_run_dir(
+        out,
+        report::run_files(frames.iter(), cfg.components),
+        cfg.overwrite,
+    )?;
     if let Some(note) = note {
         eprintln!("note: {note}");
     }
@@ -184,6 +188,7 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             frames: read_json_lines(&out.join("frames.jsonl"))?,
         },
     )?;
+    dir.finish()?;
     crate::outln!("adapter: {adapter}")?;
     let method = match cfg.method {
         crate::config::Method::Instant => {

@@ -196,6 +196,7 @@ impl Compare {
             quality: r.quality.clone(),
             backend: r.backend,
             out: self.out.clone(),
+            overwrite: false,
             exposure: r.exposure,
             components: false,
             profiling: ProfilingChoice::Auto,

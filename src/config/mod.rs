@@ -62,6 +62,10 @@ pub struct Render {
     /// Output folder
     #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Render::default().out))]
     pub out: PathBuf,
+    /// Replace frame files, preview.gif, run.json or frames.jsonl in the output folder that
+    /// no earlier irad run recorded writing (its .irad-manifest.json); refused by default
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub overwrite: bool,
     /// Exposure of the PNG previews (EXR files are linear, unscaled)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
@@ -155,6 +159,7 @@ impl Default for Render {
             quality: Quality::default(),
             backend: BackendChoice::Auto,
             out: PathBuf::from("out"),
+            overwrite: false,
             exposure: 1.0,
             components: false,
             profiling: ProfilingChoice::Auto,
@@ -195,6 +200,10 @@ pub struct Reference {
     /// Output folder
     #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Reference::default().out))]
     pub out: PathBuf,
+    /// Replace frame files or run.json in the output folder that no earlier irad run
+    /// recorded writing (its .irad-manifest.json); refused by default
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub overwrite: bool,
     /// Exposure of the PNG previews (the EXR files are linear, unscaled)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
@@ -211,6 +220,7 @@ impl Default for Reference {
             sequence: Sequence::default(),
             spp: 256,
             out: PathBuf::from("out/reference"),
+            overwrite: false,
             exposure: 1.0,
         }
     }

@@ -517,3 +517,69 @@ fn run_json_records_what_the_raster_passes_drew() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 24 item 4: a folder holding a user's own files of irad's output shapes is refused
+/// (naming one and --overwrite), leaving every file as it was; --overwrite replaces them; a
+/// second run into irad's own folder removes only what the first recorded writing.
+#[test]
+fn a_users_files_in_the_output_folder_are_never_deleted_without_overwrite() {
+    let out = tmp("users-files");
+    let o = out.to_str().unwrap();
+    let mine = [
+        "frame_0005.exr",
+        "frame_12345.exr",
+        "frame_0001_direct.exr",
+        "preview.gif",
+        "run.json",
+    ];
+    std::fs::create_dir_all(&out).unwrap();
+    for f in mine {
+        std::fs::write(out.join(f), format!("mine: {f}")).unwrap();
+    }
+    let args = [
+        "reference",
+        "cornell",
+        "--size",
+        "4x4",
+        "--spp",
+        "1",
+        "--out",
+        o,
+    ];
+    let r = irad(&args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("frame_0001_direct.exr") && err.contains("4 more"),
+        "{err}"
+    );
+    assert!(err.contains("--overwrite"), "{err}");
+    for f in mine {
+        assert_eq!(
+            std::fs::read_to_string(out.join(f)).unwrap(),
+            format!("mine: {f}")
+        );
+    }
+    assert!(!out.join("frame_0000.exr").exists());
+    // --overwrite replaces them.
+    let r = irad(&[&args[..], &["--overwrite"]].concat());
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(!out.join("frame_0005.exr").exists() && out.join("frame_0000.exr").exists());
+    assert!(std::fs::read_to_string(out.join("run.json"))
+        .unwrap()
+        .contains("\"reference\""));
+    // A second run into the folder irad wrote just works, and leaves other files alone.
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let r = irad(&[&args[..], &["--frames", "2"]].concat());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(err.contains("removed 3 files of an earlier run"), "{err}");
+    assert_eq!(frame_files(&out), ["frame_0002.exr", "frame_0002.png"]);
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    let manifest = std::fs::read_to_string(out.join(".irad-manifest.json")).unwrap();
+    assert!(
+        manifest.contains("frame_0002.exr") && !manifest.contains("frame_0000"),
+        "{manifest}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
