@@ -133,7 +133,10 @@ pub fn run(cli: Cli) -> Result<()> {
     use crate::commands;
     cli.command.validate()?;
     match cli.command {
-        Command::Render(c) => commands::render::render(&c).map(|_| ()),
+        Command::Render(c) => {
+            crate::interrupt::install()?;
+            commands::render::render(&c).map(|_| ())
+        }
         Command::Reference(c) => commands::reference::reference(&c).map(|_| ()),
         Command::Compare(c) => commands::compare::compare(&c),
         Command::Bench(c) => commands::bench::bench(&c),

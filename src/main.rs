@@ -7,6 +7,10 @@ fn main() {
         if irad::commands::is_closed_pipe(&e) {
             std::process::exit(0);
         }
+        if let Some(i) = e.downcast_ref::<irad::interrupt::Interrupted>() {
+            eprintln!("{i}");
+            std::process::exit(irad::interrupt::EXIT_STATUS);
+        }
         eprintln!("error: {}", irad::cli::report(&e));
         std::process::exit(1);
     }

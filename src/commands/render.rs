@@ -122,6 +122,8 @@ struct RunRecord<'a> {
     gpu: &'a crate::gpu::RendererConfig,
     sampler: &'a crate::vpl::sampler::SamplerParams,
     frames_rendered: u32,
+    /// Whether a signal stopped the run before its last frame.
+    interrupted: bool,
     mean: &'a StageMeans,
     frames: Vec<serde_json::Value>,
 }
@@ -162,15 +164,22 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     let mut gif = report::GifStream::create(&out.join("preview.gif"), cfg.sequence.fps)?;
     let mut means = StageMeans::default();
     let pb = report::progress(frames.len() as u64, "render");
+    let mut done = 0;
     for f in frames.iter() {
+        // A signal stops the run between frames: what is done is written as a whole run's.
+        if crate::interrupt::requested() {
+            break;
+        }
         let fo = pipeline.render_frame(f, cfg.components)?;
         let png = write_frame(out, &fo, cfg)?;
         gif.push(&png)?;
         let record = FrameRecord::of(&fo);
         means.add(&record);
         log.push(&record)?;
+        done += 1;
         pb.inc(1);
     }
+    let interrupted = done < frames.len();
     pb.finish_and_clear();
     drop(log);
     gif.finish()?;
@@ -183,12 +192,24 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             settings: cfg,
             gpu: &pipeline.renderer.config,
             sampler: &pipeline.params,
-            frames_rendered: frames.len(),
+            frames_rendered: done,
+            interrupted,
             mean: &means,
             frames: read_json_lines(&out.join("frames.jsonl"))?,
         },
     )?;
     dir.finish()?;
+    if interrupted {
+        return Err(crate::interrupt::Interrupted {
+            done,
+            planned: frames.len(),
+            what: format!(
+                "wrote their frames, preview.gif and run.json (marked interrupted) to {}",
+                out.display()
+            ),
+        }
+        .into());
+    }
     crate::outln!("adapter: {adapter}")?;
     let method = match cfg.method {
         crate::config::Method::Instant => {

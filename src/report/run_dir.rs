@@ -75,6 +75,7 @@ fn write_manifest(dir: &Path, files: &BTreeSet<String>) -> Result<()> {
 /// is the user's: the run stops naming it, unless `overwrite`, which removes it too.
 pub fn prepare_run_dir(dir: &Path, planned: BTreeSet<String>, overwrite: bool) -> Result<RunDir> {
     prepare_out_dir(dir)?;
+    remove_stray_temporaries(dir);
     let listed = read_manifest(dir);
     let mut ours = Vec::new();
     let mut foreign = Vec::new();
@@ -134,6 +135,32 @@ pub fn prepare_run_dir(dir: &Path, planned: BTreeSet<String>, overwrite: bool) -
         dir: dir.to_path_buf(),
         planned,
     })
+}
+
+/// Whether `name` is one of irad's own temporaries of an output file (`.NAME.tmp-PID.EXT`,
+/// see `image::atomic_write` and `GifStream`), and of which process.
+fn temporary_of(name: &str) -> Option<u32> {
+    let (inner, rest) = name.strip_prefix('.')?.split_once(".tmp-")?;
+    let pid = rest.split('.').next()?.parse().ok()?;
+    (is_run_output(inner) || inner == MANIFEST).then_some(pid)
+}
+
+/// Removes the temporaries a run that was killed left in `dir` (not those of a process that
+/// is still running, which may be writing them).
+fn remove_stray_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = temporary_of(&name) else {
+            continue;
+        };
+        let alive = pid == std::process::id() || Path::new(&format!("/proc/{pid}")).exists();
+        if !alive && entry.file_type().is_ok_and(|t| t.is_file()) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 impl RunDir {

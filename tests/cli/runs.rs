@@ -583,3 +583,77 @@ fn a_users_files_in_the_output_folder_are_never_deleted_without_overwrite() {
     );
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// Issue 24 item 5: SIGINT after the first frames stops a render cleanly: exit status 130,
+/// run.json marked interrupted and listing the frames done (as frames.jsonl does), the GIF
+/// of those frames, no temporary file; the next run into the folder proceeds and removes a
+/// stray temporary that a killed run left.
+#[test]
+fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
+    let out = tmp("sigint");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["render", "cornell-orbit", "--size", "32x32", "--out", o];
+    args.extend_from_slice(CHEAP);
+    let mut child = common::irad_command()
+        .args([&args[..], &["--frames", "0..2000"]].concat())
+        .env_remove("XDG_RUNTIME_DIR")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.join("frame_0002.png").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["interrupted"], true);
+    let done = run["frames"].as_array().unwrap().len();
+    assert!((3..2000).contains(&done), "{done} frames");
+    assert_eq!(run["frames_rendered"], done);
+    let lines = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
+    assert_eq!(lines.lines().count(), done);
+    assert_eq!(frame_files(&out).len(), 2 * done, "{:?}", frame_files(&out));
+    let gif = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(out.join("preview.gif")).unwrap(),
+    ))
+    .unwrap();
+    let gif_frames = image::AnimationDecoder::into_frames(gif).count();
+    assert_eq!(gif_frames, done);
+    let names = || -> Vec<String> {
+        std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert!(
+        !names().iter().any(|n| n.contains(".tmp-")),
+        "{:?}",
+        names()
+    );
+    // A killed run's temporary (pid 4000000, not running) goes; the next run proceeds.
+    std::fs::write(out.join(".preview.gif.tmp-4000000.gif"), b"GIF89a").unwrap();
+    let next = irad(&[&args[..], &["--frames", "0..2"]].concat());
+    assert!(
+        next.status.success(),
+        "{}",
+        String::from_utf8_lossy(&next.stderr)
+    );
+    assert!(
+        !names().iter().any(|n| n.contains(".tmp-")),
+        "{:?}",
+        names()
+    );
+    assert_eq!(frame_files(&out).len(), 4);
+    std::fs::remove_dir_all(&out).unwrap();
+}
