@@ -179,6 +179,14 @@ impl Render {
         }
         self.sampler.validate(self.vpls)?;
         self.quality.validate()?;
+        if self.quality.light_samples > 0 {
+            // Before any device is opened or folder made (the renderer checks again, with
+            // the adapter's limits and the count `--light-samples 0` chooses).
+            crate::gpu::renderer::check_shadow_maps(
+                self.quality.light_samples,
+                self.quality.shadow_size,
+            )?;
+        }
         check_exposure(self.exposure)
     }
 

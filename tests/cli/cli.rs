@@ -580,3 +580,30 @@ fn a_buffer_outside_the_scene_folder_needs_allow_outside_paths() {
         assert!(o.status.success(), "{args:?}: {e}");
     }
 }
+
+/// Issue 24 item 7: shadow maps past the memory cap and a candidate count past its cap are
+/// refused before any work, naming their flags, and no output folder is made.
+#[test]
+fn oversized_shadow_maps_and_candidates_are_refused_before_any_folder() {
+    let out = tmp("too-big");
+    let o = out.to_str().unwrap();
+    for (args, flags) in [
+        (
+            &["--shadow-size", "4096", "--light-samples", "64"][..],
+            &["--shadow-size", "--light-samples", "4 GiB"][..],
+        ),
+        (
+            &["--sampler", "mh", "--candidates", "16777216"][..],
+            &["--candidates", "1048576"][..],
+        ),
+    ] {
+        let base = ["render", "cornell", "--frames", "0..1", "--out", o];
+        let r = irad(&[&base[..], args].concat());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} ran");
+        for f in flags {
+            assert!(err.contains(f), "{f} missing: {err}");
+        }
+        assert!(!out.exists(), "{args:?} made {o}");
+    }
+}

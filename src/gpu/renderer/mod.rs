@@ -7,7 +7,7 @@
 mod build;
 pub mod graph;
 
-pub use build::check_config;
+pub use build::{check_config, check_shadow_maps, shadow_bytes, MAX_TEXTURE_BYTES};
 use build::{Passes, Shared};
 
 use super::bindings::bytes;
