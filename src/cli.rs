@@ -94,6 +94,37 @@ impl Command {
     }
 }
 
+/// Flags a subcommand takes through a settings type it shares with others but does not use:
+/// given, they are refused rather than silently ignored.
+const UNUSED: &[(&str, &[&str], &str)] = &[(
+    "bench",
+    &["vpls", "size", "frames", "overwrite", "components"],
+    "each --configs VPLS@WxH sets the VPL count and image size, and bench renders frames 0.. of its own into --out without cleaning it",
+)];
+
+/// Parses the command line (exiting with clap's message on an error), refusing the flags of
+/// [`UNUSED`].
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = Cli::command().get_matches();
+    for (sub, flags, why) in UNUSED {
+        let Some(m) = matches.subcommand_matches(sub) else {
+            continue;
+        };
+        for f in flags.iter() {
+            if m.value_source(f) == Some(clap::parser::ValueSource::CommandLine) {
+                Cli::command()
+                    .error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        format!("--{f} is not used by `irad {sub}`: {why}"),
+                    )
+                    .exit();
+            }
+        }
+    }
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 /// An error as the command line reports it: each setting the library names (`` `ism_size` ``)
 /// written as the flag that sets it (`--ism-size`), from the flags of every subcommand.
 pub fn report(e: &anyhow::Error) -> String {

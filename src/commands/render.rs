@@ -171,11 +171,13 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             break;
         }
         let fo = pipeline.render_frame(f, cfg.components)?;
+        // The record first: frames.jsonl lists every frame whose files are on disk (a run
+        // killed between the two leaves a record whose files are missing, never the reverse).
+        let record = FrameRecord::of(&fo);
+        log.push(&record)?;
+        means.add(&record);
         let png = write_frame(out, &fo, cfg)?;
         gif.push(&png)?;
-        let record = FrameRecord::of(&fo);
-        means.add(&record);
-        log.push(&record)?;
         done += 1;
         pb.inc(1);
     }
@@ -246,10 +248,10 @@ fn write_frame(out: &Path, fo: &FrameOutput, cfg: &config::Render) -> Result<ima
     fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
     let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
     let png = image::RgbImage::from_raw(w, h, fo.image.ldr.clone()).expect("w*h*3 bytes");
-    crate::image::atomic_write(&out.join(format!("{stem}.png")), |tmp| {
-        png.save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(anyhow::Error::from)
-    })?;
+    crate::image::write_bytes(
+        &out.join(format!("{stem}.png")),
+        &crate::image::encode(&png, image::ImageFormat::Png)?,
+    )?;
     Ok(png)
 }
 

@@ -330,7 +330,11 @@ impl Bench {
         }
         check::int("`repeat`", self.repeat, 1, 10_000)?;
         for &c in &self.cases {
-            self.case(c).validate()?;
+            // The case's VPL count is its own, not `vpls` (which bench does not take).
+            check::int(&format!("`configs` {c}: the VPL count"), c.vpls, 1, 65535)?;
+            self.case(c)
+                .validate()
+                .map_err(|e| anyhow::anyhow!("`configs` {c}: {e}"))?;
         }
         Ok(())
     }

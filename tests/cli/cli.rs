@@ -607,3 +607,23 @@ fn oversized_shadow_maps_and_candidates_are_refused_before_any_folder() {
         assert!(!out.exists(), "{args:?} made {o}");
     }
 }
+
+/// Issue 24 item 8: `irad bench` refuses the flags it would ignore (each --configs entry sets
+/// the VPL count and size), and a bad --configs entry is named as such.
+#[test]
+fn bench_refuses_flags_it_ignores_and_names_configs() {
+    for (args, expect) in [
+        (&["--vpls", "0"][..], "--vpls is not used by `irad bench`"),
+        (&["--size", "64x64"], "--size is not used by `irad bench`"),
+        (
+            &["--configs", "0@64x64"],
+            "--configs 0@64x64: the VPL count 0 is out of range",
+        ),
+    ] {
+        let r = irad(&[&["bench"][..], args].concat());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} ran");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("--vpls 0 is"), "{err}");
+    }
+}

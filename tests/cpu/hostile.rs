@@ -229,3 +229,21 @@ fn a_malformed_buffer_is_refused_without_echoing_its_bytes() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Issue 24 item 8: a write that fails (a full disk: the temporary file is made a link to
+/// /dev/full) names the file and the OS's error once, not "Format error decoding OpenExr".
+#[test]
+fn a_full_disk_names_the_file_and_the_os_error_once() {
+    let dir = folder("full");
+    let path = dir.join("frame_0000.exr");
+    let tmp = dir.join(format!(".frame_0000.exr.tmp-{}.exr", std::process::id()));
+    std::os::unix::fs::symlink("/dev/full", &tmp).unwrap();
+    let img = irad::image::Hdr::new(64, 64);
+    let e = format!("{:#}", img.write_exr(&path).unwrap_err());
+    assert!(e.starts_with(&path.display().to_string()), "{e}");
+    assert_eq!(e.matches("No space left on device").count(), 1, "{e}");
+    assert!(!e.contains("Format error"), "{e}");
+    // Nothing is left: neither the file nor the temporary.
+    assert!(!path.exists() && std::fs::symlink_metadata(&tmp).is_err());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
