@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// A PNG of `w x h` RGBA texels (row 0 at the top).
-fn png(w: u32, h: u32, texels: &[[u8; 4]]) -> Vec<u8> {
+pub(crate) fn png(w: u32, h: u32, texels: &[[u8; 4]]) -> Vec<u8> {
     let img = image::RgbaImage::from_raw(w, h, texels.concat()).unwrap();
     let mut out = std::io::Cursor::new(Vec::new());
     img.write_to(&mut out, image::ImageFormat::Png).unwrap();
@@ -23,7 +23,7 @@ fn png(w: u32, h: u32, texels: &[[u8; 4]]) -> Vec<u8> {
 /// through a 2 x 2 nearest-filtered checker (white on the diagonal) repeated 32 times: every
 /// point of the 32 x 32 lattice the mean emission is taken at lands on a black texel, so the
 /// floor emits at three points in four but is not in the emitter list.
-fn floor_emits_where_its_mean_does_not() -> serde_json::Value {
+pub(crate) fn floor_emits_where_its_mean_does_not() -> serde_json::Value {
     let (mut g, mut doc) = lit();
     let uv = g.floats(&[0., 0., 32., 0., 32., 32., 0., 32.], "VEC2", 2);
     doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(uv);
