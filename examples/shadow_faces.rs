@@ -1,7 +1,7 @@
 //! How many shadow faces a frame's emitter samples draw (of their hemicubes', culled to those
 //! that meet the geometry, or one window) and the share of the hemicubes' texels they fill:
 //! `cargo run --release --example shadow_faces -- SCENE [T]`.
-use irad::gpu::shadow::drawn_faces;
+use irad::gpu::shadow::{drawn_faces, lit_boxes};
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -13,7 +13,12 @@ fn main() -> anyhow::Result<()> {
     let frame = scene.at(t);
     let samples = frame.emitter_samples(1, 32);
     let needed: usize = samples.iter().map(irad::gpu::shadow::faces).sum();
-    let faces: Vec<_> = samples.iter().flat_map(|s| drawn_faces(s, 256)).collect();
+    let lit = lit_boxes(&frame, &samples);
+    let faces: Vec<_> = samples
+        .iter()
+        .zip(lit)
+        .flat_map(|(s, lit)| drawn_faces(s, lit, 256))
+        .collect();
     let texels: u64 = faces.iter().map(|f| f.2[0] as u64 * f.2[1] as u64).sum();
     println!(
         "{name} at t = {t}: {} samples, {needed} faces by kind, {} drawn, {:.2} of their \

@@ -26,29 +26,7 @@ pub enum Command {
     /// Time whole frames per stage (CPU stages and GPU passes) for several VPL counts and sizes
     Bench(config::Bench),
     /// Error and flicker of an image sequence (folder of frame_FFFF.exr/.png) against a reference
-    Metrics {
-        /// Folder of test frames
-        test: PathBuf,
-        /// Folder of reference frames
-        reference: PathBuf,
-        /// Where metrics.json and metrics.csv go [default: the test folder]
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// The scene the frames show (built-in name or glTF file): also the motion-compensated
-        /// flicker (warped.json)
-        #[arg(long)]
-        scene: Option<String>,
-        /// With --scene: frames per second (frame f is at time f / fps)
-        #[arg(long, default_value_t = 24.0, allow_hyphen_values = true)]
-        fps: f32,
-        /// With --scene: the --camera EYE:TARGET:FOV the frames were rendered with (the
-        /// motion warp must see the scene from the same camera)
-        #[arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")]
-        camera: Option<config::CameraSpec>,
-        /// With --scene: let a glTF scene read files outside its own folder
-        #[arg(long)]
-        allow_outside_paths: bool,
-    },
+    Metrics(config::Metrics),
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value_t = config::Render::default().backend)]
@@ -77,18 +55,7 @@ impl Command {
             Command::Reference(c) => c.validate(),
             Command::Compare(c) => c.validate(),
             Command::Bench(c) => c.validate(),
-            Command::Metrics {
-                fps, camera, scene, ..
-            } => {
-                crate::config::check::float("--fps", *fps, 0.0, true, 1000.0)?;
-                if camera.is_some() && scene.is_none() {
-                    anyhow::bail!("--camera needs --scene: it is the camera the scene's frames were rendered with");
-                }
-                match camera {
-                    Some(c) => c.validate(),
-                    None => Ok(()),
-                }
-            }
+            Command::Metrics(c) => c.validate(),
             Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
     }
@@ -171,26 +138,18 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Reference(c) => commands::reference::reference(&c).map(|_| ()),
         Command::Compare(c) => commands::compare::compare(&c),
         Command::Bench(c) => commands::bench::bench(&c),
-        Command::Metrics {
-            test,
-            reference,
-            out,
-            scene,
-            fps,
-            camera,
-            allow_outside_paths,
-        } => {
-            commands::metrics::metrics(&test, &reference, out.as_deref())?;
-            match scene {
+        Command::Metrics(m) => {
+            commands::metrics::metrics(&m.test, &m.reference, m.out.as_deref())?;
+            match &m.scene {
                 Some(s) => commands::metrics::warped(
-                    &test,
-                    &reference,
-                    &s,
-                    fps,
-                    camera.as_ref(),
-                    out.as_deref(),
+                    &m.test,
+                    &m.reference,
+                    s,
+                    m.fps,
+                    m.camera.as_ref(),
+                    m.out.as_deref(),
                     &crate::scene::load::LoadOptions {
-                        allow_outside_paths,
+                        allow_outside_paths: m.allow_outside_paths,
                     },
                 ),
                 None => Ok(()),
@@ -284,7 +243,7 @@ mod tests {
         match parse(args) {
             Err(e) => e,
             Ok(c) => match c.validate() {
-                Err(e) => format!("{e:#}"),
+                Err(e) => report(&e),
                 Ok(()) => panic!("irad {} was accepted", args.join(" ")),
             },
         }

@@ -11,7 +11,7 @@ use crate::gpu::RendererConfig;
 use crate::scene::{Frame, Scene};
 use crate::trace::Tracer;
 use crate::vpl::sampler::SamplerParams;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 /// A render's settings resolved against its scene and adapter: nothing is left to choose.
@@ -54,10 +54,15 @@ pub fn resolve(
     Ok(Resolved {
         renderer,
         sampler: sampler_params(cfg, scene),
-        radiosity: cfg
-            .method
-            .solver()
-            .map(|solver| radiosity_settings(cfg, solver, scene)),
+        radiosity: match cfg.method.solver() {
+            Some(solver) => {
+                let s = radiosity_settings(cfg, solver, scene);
+                s.validate()
+                    .with_context(|| format!("scene '{}'", scene.name))?;
+                Some(s)
+            }
+            None => None,
+        },
     })
 }
 

@@ -22,11 +22,13 @@ use std::path::PathBuf;
 pub use crate::check;
 
 mod compare;
+mod metrics;
 mod sequence;
 
 pub use crate::gpu::{Quality, MAX_SIZE};
 pub use crate::vpl::sampler::SamplerConfig;
 pub use compare::*;
+pub use metrics::Metrics;
 pub use sequence::*;
 
 /// Exposure of the PNG previews: a positive finite factor.
@@ -219,8 +221,7 @@ pub struct Reference {
 
 /// The scene `irad reference` and `irad bench` use when none is named.
 pub const DEFAULT_STILL_SCENE: &str = "cornell";
-/// The most samples per pixel a reference may take.
-pub const MAX_SPP: u32 = 1 << 20;
+pub use crate::reference::MAX_SPP;
 
 impl Default for Reference {
     fn default() -> Self {
@@ -237,8 +238,18 @@ impl Default for Reference {
 impl Reference {
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
-        check::int("`spp`", self.spp, 1, MAX_SPP)?;
+        self.settings().validate()?;
         check_exposure(self.exposure)
+    }
+
+    /// The path tracer's settings of this reference.
+    pub fn settings(&self) -> crate::reference::ReferenceSettings {
+        crate::reference::ReferenceSettings {
+            width: self.sequence.size.width,
+            height: self.sequence.size.height,
+            spp: self.spp,
+            seed: self.sequence.seed,
+        }
     }
 }
 

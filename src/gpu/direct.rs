@@ -20,7 +20,7 @@ impl GpuEmitterSample {
     /// `normal.w` and `radiance.w` (a spot's inner and outer cosines, a directional
     /// light's map half-extent, a far point light's frustum half-width), and its shadow
     /// map's window on maps of `shadow_size` texels.
-    pub(crate) fn of(l: &EmitterSample, shadow_size: u32) -> Self {
+    pub(crate) fn of(l: &EmitterSample, lit: (glam::Vec3, glam::Vec3), shadow_size: u32) -> Self {
         let (kind, a, b) = match l.kind {
             SampleKind::Area => (KIND_AREA, 0.0, 0.0),
             SampleKind::PointHalf => (KIND_POINT_HALF, 0.0, 0.0),
@@ -31,7 +31,7 @@ impl GpuEmitterSample {
             SampleKind::Directional { extent } => (KIND_DIRECTIONAL, extent, 0.0),
             SampleKind::PointCone { tan_half } => (KIND_POINT_CONE, tan_half, 0.0),
         };
-        let window = super::shadow::Window::of(l, shadow_size)
+        let window = super::shadow::Window::of(l, lit, shadow_size)
             .map_or([0.0; 4], |w| [w.centre.x, w.centre.y, w.scale.x, w.scale.y]);
         GpuEmitterSample {
             pos: l.position.extend(kind).to_array(),

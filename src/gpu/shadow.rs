@@ -11,8 +11,9 @@ use super::common::Tri;
 use super::gbuffer::{self, skipped_faces};
 use super::Gpu;
 use crate::scene::culling::{CullView, Instance};
-use crate::scene::{EmitterSample, SampleKind};
+use crate::scene::{EmitterSample, Frame, SampleKind};
 use glam::Vec3;
+use std::collections::HashMap;
 
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 
@@ -55,6 +56,26 @@ pub(crate) const PASS: Pass = Pass {
         ],
     }],
 };
+
+/// For each of `samples`, the box (lo, hi) around the geometry its light can reach, which
+/// its shadow map covers: the triangles in front of an area sample's emitter triangle (one box
+/// a triangle, however many samples lie on it) or of a half point light's plane, else the
+/// whole frame's; an empty box (lo > hi) if nothing is in front. The shadow map draws only the
+/// hemicube faces whose frustum meets it, or one [`Window`] face over it.
+pub fn lit_boxes(frame: &Frame, samples: &[EmitterSample]) -> Vec<(Vec3, Vec3)> {
+    let mut front: HashMap<u32, (Vec3, Vec3)> = HashMap::new();
+    let mut all = None;
+    samples
+        .iter()
+        .map(|s| match (s.kind, s.tri) {
+            (SampleKind::Area, Some(t)) => *front.entry(t).or_insert_with(|| {
+                frame.bounds_in_front(frame.tris[t as usize][0], frame.normals[t as usize])
+            }),
+            (SampleKind::PointHalf, _) => frame.bounds_in_front(s.position, s.normal),
+            _ => *all.get_or_insert_with(|| frame.bounds()),
+        })
+        .collect()
+}
 
 /// Shadow-map faces a sample needs (of a hemicube's five; they come first): one for a
 /// directional light and for a spot whose cone fits the front face, else five.
@@ -108,12 +129,13 @@ pub struct Window {
 }
 
 impl Window {
-    /// `s`'s window on a shadow map of `size` x `size` texels, if it has one.
-    pub fn of(s: &EmitterSample, size: u32) -> Option<Window> {
+    /// `s`'s window on a shadow map of `size` x `size` texels over the box `lit` its light
+    /// reaches ([`lit_boxes`]), if it has one.
+    pub fn of(s: &EmitterSample, lit: (Vec3, Vec3), size: u32) -> Option<Window> {
         if !matches!(s.kind, SampleKind::Area | SampleKind::PointHalf) {
             return None;
         }
-        let (lo, hi) = s.sees;
+        let (lo, hi) = lit;
         if lo.cmpgt(hi).any() {
             return None;
         }
@@ -177,11 +199,11 @@ pub fn face_view((r, u, f): (Vec3, Vec3, Vec3), eye: Vec3, near: f32, ortho: boo
 pub type DrawnFace = (usize, (Vec3, Vec3, Vec3), [u32; 2]);
 
 /// The faces that sample `s`'s shadow map of `size` x `size` texels draws: its [`Window`]'s one
-/// face if it has one; else of those its kind needs ([`EmitterSample::faces`]), the ones whose
+/// face if it has one; else of those its kind needs ([`faces`]), the ones whose
 /// frustum meets the geometry its light can reach (a far point light's one face zoomed to its
 /// frustum). A receiver's direction always falls in a drawn face.
-pub fn drawn_faces(s: &EmitterSample, size: u32) -> Vec<DrawnFace> {
-    if let Some(w) = Window::of(s, size) {
+pub fn drawn_faces(s: &EmitterSample, lit: (Vec3, Vec3), size: u32) -> Vec<DrawnFace> {
+    if let Some(w) = Window::of(s, lit, size) {
         return vec![(0, w.axes(s.normal), w.texels.to_array())];
     }
     let zoom = match s.kind {
@@ -193,7 +215,7 @@ pub fn drawn_faces(s: &EmitterSample, size: u32) -> Vec<DrawnFace> {
         .into_iter()
         .take(faces(s))
         .enumerate()
-        .filter(|&(_, b)| single || frustum_meets_box(s.position, b, s.sees))
+        .filter(|&(_, b)| single || frustum_meets_box(s.position, b, lit))
         .map(|(k, (r, u, f))| (k, (r * zoom, u * zoom, f), [size; 2]))
         .collect()
 }
@@ -388,7 +410,7 @@ impl ShadowMaps {
             .write_buffer(&s.positions, 0, bytemuck::cast_slice(&s.corners.0));
     }
 
-    /// Renders the shadow maps of `samples` (the faces [`drawn_faces`] gives, face `k` of
+    /// Renders the shadow maps of `samples` over the boxes `lit` their light reaches (the faces [`drawn_faces`] gives, face `k` of
     /// sample `j` in layer `5 j + k`) with depth range `(near, far)` for hemicubes,
     /// unless they are the ones last drawn and the geometry did not move. Each face leaves out
     /// what [`CullView::runs`] says of the `instances` (if `cull`; else it draws everything).
@@ -398,7 +420,7 @@ impl ShadowMaps {
         &mut self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
-        samples: &[EmitterSample],
+        (samples, lit): (&[EmitterSample], &[(Vec3, Vec3)]),
         (near, far): (f32, f32),
         (vertices, tris): (&wgpu::Buffer, u32),
         (instances, cull): (&[Instance], bool),
@@ -412,7 +434,7 @@ impl ShadowMaps {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
-            for (k, (r, u, f), viewport) in drawn_faces(s, self.size) {
+            for (k, (r, u, f), viewport) in drawn_faces(s, lit[j], self.size) {
                 let face = Face {
                     pos: s.position.extend(1.0).to_array(),
                     right: r.extend(0.0).to_array(),
@@ -618,10 +640,11 @@ mod tests {
                 radiance: Vec3::ONE,
                 kind: SampleKind::Area,
                 reach: 0.0,
-                sees: (a.min(b), a.max(b)),
+                tri: None,
             };
-            let drawn: Vec<usize> = drawn_faces(&sample, 256).iter().map(|f| f.0).collect();
-            let window = Window::of(&sample, 256);
+            let lit = (a.min(b), a.max(b));
+            let drawn: Vec<usize> = drawn_faces(&sample, lit, 256).iter().map(|f| f.0).collect();
+            let window = Window::of(&sample, lit, 256);
             culled += 5 - drawn.len();
             windows += window.is_some() as usize;
             for _ in 0..50 {
@@ -660,13 +683,14 @@ mod tests {
             radiance: Vec3::ONE,
             kind: SampleKind::Area,
             reach: 0.0,
-            sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 1.0, 8.0)),
+            tri: None,
         };
-        let faces = drawn_faces(&s, 256);
+        let lit = (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(8.0, 1.0, 8.0));
+        let faces = drawn_faces(&s, lit, 256);
         assert_eq!(faces.len(), 1);
         // The window: x and z in [-8/9, 8/9] at unit distance, 1% wider: half-width
         // 0.505 * 16/9 = 0.8978, over the whole map.
-        let w = Window::of(&s, 256).unwrap();
+        let w = Window::of(&s, lit, 256).unwrap();
         assert!(w.centre.abs().max_element() < 1e-6, "{w:?}");
         assert_eq!(w.texels, glam::UVec2::splat(256));
         assert_eq!(faces[0].2, [256, 256]);
@@ -688,12 +712,9 @@ mod tests {
         );
         // A box reaching past 45 degrees along +x projects wider than a hemicube face: the
         // front face and that side's.
-        let wide = EmitterSample {
-            sees: (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(11.0, 1.0, 8.0)),
-            ..s
-        };
-        assert_eq!(Window::of(&wide, 256), None);
-        assert_eq!(drawn_faces(&wide, 256).len(), 2);
+        let wide = (Vec3::new(-8.0, 0.0, -8.0), Vec3::new(11.0, 1.0, 8.0));
+        assert_eq!(Window::of(&s, wide, 256), None);
+        assert_eq!(drawn_faces(&s, wide, 256).len(), 2);
         assert!(!frustum_meets_box(
             Vec3::ZERO,
             (Vec3::X, Vec3::Y, Vec3::Z),

@@ -252,6 +252,18 @@ impl Default for RadiositySettings {
     }
 }
 
+impl RadiositySettings {
+    /// Checks the settings, naming the one that is wrong (the element size in scene units).
+    pub fn validate(&self) -> anyhow::Result<()> {
+        crate::check::float("`element_size`", self.element_size, 0.0, true, 1e9)?;
+        crate::check::int("`max_elements`", self.max_elements, 1, 1 << 24)?;
+        crate::check::int("`refine_rounds`", self.refine_rounds, 0, 64)?;
+        crate::check::float("`refine_threshold`", self.refine_threshold, 0.0, true, 1e6)?;
+        crate::check::float("`tolerance`", self.tolerance, 0.0, true, 1.0)?;
+        crate::check::int("`rays`", self.rays, 1, 1 << 32)
+    }
+}
+
 /// Solves the frame with a classical method: mesh, solve, and adaptive refinement rounds
 /// (split where neighbours differ, solve again).
 pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution {
@@ -351,6 +363,43 @@ fn progressive_params(s: &RadiositySettings) -> progressive::ProgressiveSettings
 mod tests {
     use super::*;
     use crate::scene::builtin;
+
+    #[test]
+    fn settings_are_checked_naming_the_setting() {
+        assert!(RadiositySettings::default().validate().is_ok());
+        let err = |s: RadiositySettings| s.validate().unwrap_err().to_string();
+        let d = RadiositySettings::default;
+        assert_eq!(
+            err(RadiositySettings {
+                element_size: 0.0,
+                ..d()
+            }),
+            "`element_size` 0 is out of range: it must be > 0 and at most 1000000000"
+        );
+        assert_eq!(
+            err(RadiositySettings {
+                element_size: f32::NAN,
+                ..d()
+            }),
+            "`element_size` NaN is not a number"
+        );
+        assert!(err(RadiositySettings {
+            max_elements: 0,
+            ..d()
+        })
+        .starts_with("`max_elements` 0"));
+        assert!(err(RadiositySettings {
+            tolerance: 0.0,
+            ..d()
+        })
+        .starts_with("`tolerance` 0"));
+        assert!(err(RadiositySettings { rays: 0, ..d() }).starts_with("`rays` 0"));
+        assert!(err(RadiositySettings {
+            refine_rounds: 65,
+            ..d()
+        })
+        .starts_with("`refine_rounds` 65"));
+    }
 
     #[test]
     fn cache_solves_again_only_when_geometry_or_lights_move() {

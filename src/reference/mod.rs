@@ -19,6 +19,11 @@ use std::f32::consts::PI;
 /// Up to this many punctual lights, every path vertex takes all of them (a shadow ray each).
 const ALL_LIGHTS: usize = 8;
 
+/// The most samples per pixel a reference may take.
+pub const MAX_SPP: u32 = 1 << 20;
+/// The widest and tallest reference image.
+pub const MAX_SIZE: u32 = 16384;
+
 /// Parameters of one reference image.
 #[derive(Clone, Copy, Debug)]
 pub struct ReferenceSettings {
@@ -26,6 +31,26 @@ pub struct ReferenceSettings {
     pub height: u32,
     pub spp: u32,
     pub seed: u64,
+}
+
+impl Default for ReferenceSettings {
+    fn default() -> Self {
+        ReferenceSettings {
+            width: 256,
+            height: 256,
+            spp: 256,
+            seed: 1,
+        }
+    }
+}
+
+impl ReferenceSettings {
+    /// Checks the settings, naming the one that is wrong.
+    pub fn validate(&self) -> anyhow::Result<()> {
+        crate::check::int("`size`", self.width, 1, MAX_SIZE)?;
+        crate::check::int("`size`", self.height, 1, MAX_SIZE)?;
+        crate::check::int("`spp`", self.spp, 1, MAX_SPP)
+    }
 }
 
 /// Renders one frame. Each pixel is the box-filtered mean radiance over its
@@ -162,6 +187,28 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
 mod tests {
     use super::*;
     use crate::scene::builtin;
+
+    #[test]
+    fn settings_are_checked_naming_the_setting() {
+        assert!(ReferenceSettings::default().validate().is_ok());
+        let err = |s: ReferenceSettings| s.validate().unwrap_err().to_string();
+        let d = ReferenceSettings::default();
+        assert_eq!(
+            err(ReferenceSettings { spp: 0, ..d }),
+            "`spp` 0 is out of range: it must be 1 to 1048576"
+        );
+        assert!(err(ReferenceSettings {
+            spp: MAX_SPP + 1,
+            ..d
+        })
+        .starts_with("`spp` 1048577"));
+        assert!(err(ReferenceSettings { width: 0, ..d }).starts_with("`size` 0 is out of range"));
+        assert!(err(ReferenceSettings {
+            height: MAX_SIZE + 1,
+            ..d
+        })
+        .starts_with("`size` 16385"));
+    }
 
     /// White furnace: closed box, albedo 0.5, every wall emits 1: radiance 1/(1-0.5) = 2.
     #[test]

@@ -3,7 +3,6 @@
 
 use super::{Frame, LightKind, PunctualLight};
 use glam::Vec3;
-use std::collections::HashMap;
 
 /// A point sample on the emitters for direct light: position, unit normal (the emitting
 /// side) and `Le / (pdf_area * count)`, so that direct radiance at x is the sum over samples of
@@ -18,10 +17,8 @@ pub struct EmitterSample {
     /// sphere around the geometry, far side), so that its shadow maps reach that far; 0 for
     /// points on emitter triangles (which lie within the geometry).
     pub reach: f32,
-    /// The box (lo, hi) around the geometry its light can reach: the triangles in front of
-    /// an area sample's triangle or a half point light's plane, else the whole frame's. Its
-    /// shadow map draws only the hemicube faces whose frustum meets it.
-    pub sees: (Vec3, Vec3),
+    /// The emitter triangle a point sample lies on; None for a punctual light.
+    pub tri: Option<u32>,
 }
 
 /// What an [`EmitterSample`] stands for, and so how its light reaches a point.
@@ -102,16 +99,11 @@ impl Frame {
             return out;
         }
         let mut r = crate::math::rng(&[seed, 0xd1ec7]);
-        // The box in front of each emitter triangle drawn from, computed once a frame.
-        let mut front: HashMap<usize, (Vec3, Vec3)> = HashMap::new();
         out.extend((0..count).map(|j| {
             let u = ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7);
             let (e, p_e) = em.pick(u);
             let tri = em.tris[e] as usize;
             let b = crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
-            let sees = *front
-                .entry(tri)
-                .or_insert_with(|| self.bounds_in_front(self.tris[tri][0], self.normals[tri]));
             EmitterSample {
                 position: self.point(tri, b.x, b.y),
                 normal: self.normals[tri],
@@ -119,7 +111,7 @@ impl Frame {
                     * (self.areas[tri] / (p_e * count as f32)),
                 kind: SampleKind::Area,
                 reach: 0.0,
-                sees,
+                tri: Some(tri as u32),
             }
         }));
         out
@@ -191,7 +183,6 @@ impl Frame {
         let radiance = l.intensity * weight;
         let (c, r) = self.emitters.sphere;
         let reach = (l.position - c).length() + r;
-        let sees = self.bounds();
         match l.kind {
             LightKind::Point if half.is_none() && self.cone_of(l).is_some() => {
                 let (axis, tan_half) = self.cone_of(l).unwrap();
@@ -201,7 +192,7 @@ impl Frame {
                     radiance,
                     kind: SampleKind::PointCone { tan_half },
                     reach,
-                    sees,
+                    tri: None,
                 });
             }
             LightKind::Point => {
@@ -223,7 +214,7 @@ impl Frame {
                         radiance: radiance * scale,
                         kind: SampleKind::PointHalf,
                         reach,
-                        sees: self.bounds_in_front(l.position, axis * s),
+                        tri: None,
                     });
                 }
             }
@@ -239,7 +230,7 @@ impl Frame {
                     cos_outer,
                 },
                 reach,
-                sees,
+                tri: None,
             }),
             LightKind::Directional => {
                 let extent = r * 1.01;
@@ -249,7 +240,7 @@ impl Frame {
                     radiance,
                     kind: SampleKind::Directional { extent },
                     reach: 2.0 * extent,
-                    sees,
+                    tri: None,
                 });
             }
         }

@@ -133,9 +133,11 @@ fn windowed_shadow_faces_keep_the_direct_light_of_the_twin() {
     let scene = builtin::load("atrium").unwrap().unwrap();
     let frame = scene.at(0.0);
     let lights = frame.emitter_samples(1, 8);
+    let lit = irad::gpu::shadow::lit_boxes(&frame, &lights);
     let drawn: usize = lights
         .iter()
-        .map(|s| irad::gpu::shadow::drawn_faces(s, 256).len())
+        .zip(lit)
+        .map(|(s, lit)| irad::gpu::shadow::drawn_faces(s, lit, 256).len())
         .sum();
     let kinds: usize = lights.iter().map(irad::gpu::shadow::faces).sum();
     assert!(

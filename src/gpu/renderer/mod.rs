@@ -161,6 +161,8 @@ struct Last {
     tris: Vec<Tri>,
     vpls: Vec<GpuVpl>,
     lights: Vec<GpuEmitterSample>,
+    /// The box each emitter sample's light can reach ([`super::shadow::lit_boxes`]).
+    lit: Vec<(glam::Vec3, glam::Vec3)>,
 }
 
 /// Whether two slices hold the same bits.
@@ -407,11 +409,13 @@ impl Renderer {
 
     /// Uploads the emitter samples unless they are the same as last frame's (and reuse is
     /// on); returns whether they are the same.
-    fn upload_lights(&mut self, samples: &[EmitterSample]) -> bool {
+    fn upload_lights(&mut self, frame: &Frame, samples: &[EmitterSample]) -> bool {
         let size = self.config.shadow_size;
+        self.last.lit = super::shadow::lit_boxes(frame, samples);
         let lights: Vec<GpuEmitterSample> = samples
             .iter()
-            .map(|s| GpuEmitterSample::of(s, size))
+            .zip(&self.last.lit)
+            .map(|(s, &lit)| GpuEmitterSample::of(s, lit, size))
             .collect();
         let same_bits = same(&self.last.lights, &lights);
         let kept = self.reuse && same_bits;
@@ -445,7 +449,7 @@ impl Renderer {
                 bytemuck::cast_slice(input.near),
             );
         }
-        let same_lights = self.upload_lights(input.emitter_samples);
+        let same_lights = self.upload_lights(f, input.emitter_samples);
         let lights_kept = self.reuse && same_lights;
         // The history holds while the light is the same: same triangles, same emitter samples.
         let history_kept = if let Some(t) = &mut self.temporal {
@@ -550,7 +554,7 @@ impl Renderer {
         f.shadows_drawn = self.shadows.encode(
             &self.gpu,
             enc,
-            f.input.emitter_samples,
+            (f.input.emitter_samples, &self.last.lit),
             (f.near, f.far),
             (&self.vertices, self.tri_count as u32),
             (instances, self.cull),
