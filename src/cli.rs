@@ -414,8 +414,9 @@ mod tests {
         assert!(e.contains("past the last frame"), "{e}");
         let e = error(&["render", "--clamp", "-1"]);
         assert!(e.contains("--clamp -1 is out of range"), "{e}");
+        // A bench configuration's VPL count is named as the --configs entry it is (issue 24).
         let e = error(&["bench", "--configs", "0@64x64"]);
-        assert!(e.starts_with("--vpls 0"), "{e}");
+        assert!(e.starts_with("--configs 0@64x64"), "{e}");
         let e = error(&["compare", "--samplers", "cdf", "--vpls", "4,0"]);
         assert!(e.starts_with("--vpls 0"), "{e}");
     }
