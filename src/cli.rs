@@ -135,7 +135,10 @@ pub fn run(cli: Cli) -> Result<()> {
             crate::interrupt::install()?;
             commands::render::render(&c).map(|_| ())
         }
-        Command::Reference(c) => commands::reference::reference(&c).map(|_| ()),
+        Command::Reference(c) => {
+            crate::interrupt::install()?;
+            commands::reference::reference(&c).map(|_| ())
+        }
         Command::Compare(c) => commands::compare::compare(&c),
         Command::Bench(c) => commands::bench::bench(&c),
         Command::Metrics(m) => {

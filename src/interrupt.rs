@@ -1,4 +1,5 @@
-//! SIGINT and SIGTERM, for the commands that write a sequence of frames: the first signal
+//! SIGINT and SIGTERM, for the commands that write a sequence of frames (`irad render`,
+//! `irad reference`): the first signal
 //! sets a flag that the frame loop reads between frames (the frame in flight is finished and
 //! written, then the run writes what a finished run writes, marked interrupted, and exits
 //! with status 130); a second signal exits at once, leaving the files already in place.

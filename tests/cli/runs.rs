@@ -657,3 +657,45 @@ fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
     assert_eq!(frame_files(&out).len(), 4);
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// `irad reference` stops the same way: the frame in flight finished, run.json marked
+/// interrupted, exit status 130.
+#[test]
+fn sigint_stops_a_reference_cleanly() {
+    let out = tmp("sigint-reference");
+    let o = out.to_str().unwrap();
+    let args = [
+        "reference",
+        "cornell-orbit",
+        "--size",
+        "16x16",
+        "--spp",
+        "4",
+    ];
+    let mut child = common::irad_command()
+        .args([&args[..], &["--frames", "0..20000", "--out", o]].concat())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.join("frame_0002.png").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["interrupted"], true);
+    let done = run["frames"].as_array().unwrap().len();
+    assert!((3..20000).contains(&done), "{done} frames");
+    assert_eq!(frame_files(&out).len(), 2 * done);
+    std::fs::remove_dir_all(&out).unwrap();
+}
