@@ -40,6 +40,10 @@ pub enum Command {
         /// Write the built-in scenes' glTF files into this folder (how scenes/ is made)
         #[arg(long)]
         generate: Option<PathBuf>,
+        /// Let a glTF scene read buffer and image files outside its own folder (absolute
+        /// URIs, `..`, symbolic links leading out); refused by default
+        #[arg(long)]
+        allow_outside_paths: bool,
     },
 }
 
@@ -55,6 +59,37 @@ impl Command {
             Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
     }
+}
+
+/// Flags a subcommand takes through a settings type it shares with others but does not use:
+/// given, they are refused rather than silently ignored.
+const UNUSED: &[(&str, &[&str], &str)] = &[(
+    "bench",
+    &["vpls", "size", "frames", "overwrite", "components"],
+    "each --configs VPLS@WxH sets the VPL count and image size, and bench renders frames 0.. of its own into --out without cleaning it",
+)];
+
+/// Parses the command line (exiting with clap's message on an error), refusing the flags of
+/// [`UNUSED`].
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = Cli::command().get_matches();
+    for (sub, flags, why) in UNUSED {
+        let Some(m) = matches.subcommand_matches(sub) else {
+            continue;
+        };
+        for f in flags.iter() {
+            if m.value_source(f) == Some(clap::parser::ValueSource::CommandLine) {
+                Cli::command()
+                    .error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        format!("--{f} is not used by `irad {sub}`: {why}"),
+                    )
+                    .exit();
+            }
+        }
+    }
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
 /// An error as the command line reports it: each setting the library names (`` `ism_size` ``)
@@ -96,8 +131,14 @@ pub fn run(cli: Cli) -> Result<()> {
     use crate::commands;
     cli.command.validate()?;
     match cli.command {
-        Command::Render(c) => commands::render::render(&c).map(|_| ()),
-        Command::Reference(c) => commands::reference::reference(&c).map(|_| ()),
+        Command::Render(c) => {
+            crate::interrupt::install()?;
+            commands::render::render(&c).map(|_| ())
+        }
+        Command::Reference(c) => {
+            crate::interrupt::install()?;
+            commands::reference::reference(&c).map(|_| ())
+        }
         Command::Compare(c) => commands::compare::compare(&c),
         Command::Bench(c) => commands::bench::bench(&c),
         Command::Metrics(m) => {
@@ -110,14 +151,25 @@ pub fn run(cli: Cli) -> Result<()> {
                     m.fps,
                     m.camera.as_ref(),
                     m.out.as_deref(),
+                    &crate::scene::load::LoadOptions {
+                        allow_outside_paths: m.allow_outside_paths,
+                    },
                 ),
                 None => Ok(()),
             }
         }
         Command::Info { backend } => commands::info(backend),
-        Command::Scenes { scene, generate } => {
-            commands::scenes(scene.as_deref(), generate.as_deref())
-        }
+        Command::Scenes {
+            scene,
+            generate,
+            allow_outside_paths,
+        } => commands::scenes(
+            scene.as_deref(),
+            generate.as_deref(),
+            &crate::scene::load::LoadOptions {
+                allow_outside_paths,
+            },
+        ),
     }
 }
 
@@ -365,8 +417,9 @@ mod tests {
         assert!(e.contains("past the last frame"), "{e}");
         let e = error(&["render", "--clamp", "-1"]);
         assert!(e.contains("--clamp -1 is out of range"), "{e}");
+        // A bench configuration's VPL count is named as the --configs entry it is (issue 24).
         let e = error(&["bench", "--configs", "0@64x64"]);
-        assert!(e.starts_with("--vpls 0"), "{e}");
+        assert!(e.starts_with("--configs 0@64x64"), "{e}");
         let e = error(&["compare", "--samplers", "cdf", "--vpls", "4,0"]);
         assert!(e.starts_with("--vpls 0"), "{e}");
     }

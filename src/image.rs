@@ -69,19 +69,13 @@ impl Hdr {
         let flat: Vec<f32> = self.data.iter().flat_map(|c| c.to_array()).collect();
         let img =
             image::Rgb32FImage::from_raw(self.width, self.height, flat).context("image size")?;
-        atomic_write(path, |tmp| {
-            img.save_with_format(tmp, image::ImageFormat::OpenExr)
-                .map_err(anyhow::Error::from)
-        })
+        write_bytes(path, &encode(&img, image::ImageFormat::OpenExr)?)
     }
 
     /// Writes the tone-mapped preview as PNG.
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<()> {
         let img = self.to_rgb_image(exposure);
-        atomic_write(path, |tmp| {
-            img.save_with_format(tmp, image::ImageFormat::Png)
-                .map_err(anyhow::Error::from)
-        })
+        write_bytes(path, &encode(&img, image::ImageFormat::Png)?)
     }
 
     /// Reads an EXR (linear) or PNG/other 8-bit file (sRGB decoded to linear).
@@ -156,6 +150,20 @@ pub fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
         let _ = std::fs::remove_file(&tmp);
     }
     result.with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// An image encoded in memory: the encoders see no file, so a failed write (a full disk) is
+/// reported as the OS's error on the file, once, not as the encoder's "format error".
+pub fn encode<P, C>(img: &image::ImageBuffer<P, C>, format: image::ImageFormat) -> Result<Vec<u8>>
+where
+    P: image::Pixel + image::PixelWithColorType,
+    [P::Subpixel]: image::EncodableLayout,
+    C: std::ops::Deref<Target = [P::Subpixel]>,
+{
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, format)
+        .with_context(|| format!("encoding a {format:?} image"))?;
+    Ok(out.into_inner())
 }
 
 /// Writes bytes atomically.

@@ -7,7 +7,7 @@
 
 /// Module paths from the bottom layer up; entries of one inner slice share a layer.
 pub const LAYERS: &[&[&str]] = &[
-    &["math", "image", "check", "layers"],
+    &["math", "image", "check", "layers", "interrupt"],
     &["scene"],
     &["trace"],
     &[

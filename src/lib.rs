@@ -12,6 +12,7 @@ pub mod config;
 pub mod frame;
 pub mod gpu;
 pub mod image;
+pub mod interrupt;
 #[cfg(test)]
 mod layers;
 pub mod math;

@@ -35,8 +35,11 @@ pub fn resolve(
     limits: &wgpu::Limits,
 ) -> Result<Resolved> {
     let mut renderer = bounds(cfg, frame0.tris.len());
-    // Within the adapter's shadow layers, 5 a sample.
-    let most = (limits.max_texture_array_layers / 5).max(1);
+    // Within the adapter's shadow layers, 5 a sample, and irad's cap on a texture's bytes.
+    let per_sample = crate::gpu::renderer::shadow_bytes(1, cfg.quality.shadow_size);
+    let most = (limits.max_texture_array_layers / 5)
+        .min((crate::gpu::renderer::MAX_TEXTURE_BYTES / per_sample) as u32)
+        .max(1);
     renderer.light_samples = light_samples(cfg, frame0, tracer, most);
     let em = &frame0.emitters;
     if renderer.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {

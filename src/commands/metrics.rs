@@ -75,9 +75,10 @@ pub fn warped(
     fps: f32,
     camera: Option<&crate::config::CameraSpec>,
     out: Option<&Path>,
+    options: &crate::scene::load::LoadOptions,
 ) -> Result<()> {
     let (numbers, t, r) = crate::metrics::read_pair(test, reference)?;
-    let mut scene = crate::scene::builtin::load_any(scene)?;
+    let mut scene = crate::scene::builtin::load_any_with(scene, options)?;
     if let Some(c) = camera {
         c.apply(&mut scene)?;
     }

@@ -43,15 +43,19 @@ use anyhow::Result;
 use std::path::Path;
 
 /// Loads the scene and prints its warnings.
-pub use crate::config::load_scene;
+pub use crate::config::{load_scene, load_scene_with};
 
 /// `irad scenes`: the built-in scenes and what each stresses; `--generate DIR` writes them;
 /// `irad scenes FILE` inspects one.
-pub fn scenes(scene: Option<&str>, generate: Option<&Path>) -> Result<()> {
+pub fn scenes(
+    scene: Option<&str>,
+    generate: Option<&Path>,
+    options: &crate::scene::load::LoadOptions,
+) -> Result<()> {
     if let Some(spec) = scene {
         crate::out!(
             "{}",
-            crate::scene::inspect::inspect(&builtin::load_any(spec)?)
+            crate::scene::inspect::inspect(&builtin::load_any_with(spec, options)?)
         )?;
         return Ok(());
     }

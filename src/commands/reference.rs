@@ -15,6 +15,8 @@ struct ReferenceRun<'a> {
     settings: &'a config::Reference,
     frames: Vec<ReferenceFrame>,
     threads: usize,
+    /// Whether a signal stopped the run before its last frame.
+    interrupted: bool,
 }
 
 #[derive(Serialize)]
@@ -68,8 +70,10 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     let spec = seq.scene_or(config::DEFAULT_STILL_SCENE);
     let scene = seq.load_scene(config::DEFAULT_STILL_SCENE)?;
     let out = &cfg.out;
-    report::prepare_run_dir(out)?;
     let frames = seq.frames_or_first();
+    let mut planned = report::run_files(frames.iter(), false);
+    planned.retain(|f| f != "preview.gif" && f != "frames.jsonl");
+    let dir = report::prepare_run_dir(out, planned, cfg.overwrite)?;
     let pb = report::progress(frames.len() as u64 * seq.size.height as u64, "reference");
     let mut record = ReferenceRun {
         command: "reference",
@@ -77,6 +81,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
         settings: cfg,
         frames: Vec::new(),
         threads: rayon::current_num_threads(),
+        interrupted: false,
     };
     let mut images = Vec::new();
     let mut start = Instant::now();
@@ -84,7 +89,8 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
         &scene,
         seq,
         cfg.spp,
-        frames.iter(),
+        // A signal stops the run between frames (the frame in flight is finished).
+        frames.iter().take_while(|_| !crate::interrupt::requested()),
         &|| pb.inc(1),
         &mut |f, time, img| {
             report::write_frame(out, f, &img, cfg.exposure)?;
@@ -100,7 +106,21 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
         },
     )?;
     pb.finish_and_clear();
+    let done = record.frames.len() as u32;
+    record.interrupted = done < frames.len();
     report::write_json(&out.join("run.json"), &record)?;
+    dir.finish()?;
+    if record.interrupted {
+        return Err(crate::interrupt::Interrupted {
+            done,
+            planned: frames.len(),
+            what: format!(
+                "wrote their frames and run.json (marked interrupted) to {}",
+                out.display()
+            ),
+        }
+        .into());
+    }
     for fr in &record.frames {
         crate::outln!(
             "frame {:4}  t={:.3}s  {:.2}s  mean RGB ({:.4}, {:.4}, {:.4})",

@@ -122,6 +122,8 @@ struct RunRecord<'a> {
     gpu: &'a crate::gpu::RendererConfig,
     sampler: &'a crate::vpl::sampler::SamplerParams,
     frames_rendered: u32,
+    /// Whether a signal stopped the run before its last frame.
+    interrupted: bool,
     mean: &'a StageMeans,
     frames: Vec<serde_json::Value>,
 }
@@ -147,9 +149,13 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
     // Sizes are checked against the adapter, and the folder for writing, before any frame.
     let mut pipeline = Pipeline::new(gpu, scene, cfg)?;
-    let out = &cfg.out;
-    report::prepare_run_dir(out)?;
     let (frames, note) = cfg.sequence.frames_or_all(pipeline.scene.duration());
+    let out = &cfg.out;
+    let dir = report::prepare_run_dir(
+        out,
+        report::run_files(frames.iter(), cfg.components),
+        cfg.overwrite,
+    )?;
     if let Some(note) = note {
         eprintln!("note: {note}");
     }
@@ -158,15 +164,24 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     let mut gif = report::GifStream::create(&out.join("preview.gif"), cfg.sequence.fps)?;
     let mut means = StageMeans::default();
     let pb = report::progress(frames.len() as u64, "render");
+    let mut done = 0;
     for f in frames.iter() {
+        // A signal stops the run between frames: what is done is written as a whole run's.
+        if crate::interrupt::requested() {
+            break;
+        }
         let fo = pipeline.render_frame(f, cfg.components)?;
+        // The record first: frames.jsonl lists every frame whose files are on disk (a run
+        // killed between the two leaves a record whose files are missing, never the reverse).
+        let record = FrameRecord::of(&fo);
+        log.push(&record)?;
+        means.add(&record);
         let png = write_frame(out, &fo, cfg)?;
         gif.push(&png)?;
-        let record = FrameRecord::of(&fo);
-        means.add(&record);
-        log.push(&record)?;
+        done += 1;
         pb.inc(1);
     }
+    let interrupted = done < frames.len();
     pb.finish_and_clear();
     drop(log);
     gif.finish()?;
@@ -179,11 +194,24 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             settings: cfg,
             gpu: &pipeline.renderer.config,
             sampler: &pipeline.params,
-            frames_rendered: frames.len(),
+            frames_rendered: done,
+            interrupted,
             mean: &means,
             frames: read_json_lines(&out.join("frames.jsonl"))?,
         },
     )?;
+    dir.finish()?;
+    if interrupted {
+        return Err(crate::interrupt::Interrupted {
+            done,
+            planned: frames.len(),
+            what: format!(
+                "wrote their frames, preview.gif and run.json (marked interrupted) to {}",
+                out.display()
+            ),
+        }
+        .into());
+    }
     crate::outln!("adapter: {adapter}")?;
     let method = match cfg.method {
         crate::config::Method::Instant => {
@@ -220,10 +248,10 @@ fn write_frame(out: &Path, fo: &FrameOutput, cfg: &config::Render) -> Result<ima
     fo.image.hdr.write_exr(&out.join(format!("{stem}.exr")))?;
     let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
     let png = image::RgbImage::from_raw(w, h, fo.image.ldr.clone()).expect("w*h*3 bytes");
-    crate::image::atomic_write(&out.join(format!("{stem}.png")), |tmp| {
-        png.save_with_format(tmp, image::ImageFormat::Png)
-            .map_err(anyhow::Error::from)
-    })?;
+    crate::image::write_bytes(
+        &out.join(format!("{stem}.png")),
+        &crate::image::encode(&png, image::ImageFormat::Png)?,
+    )?;
     Ok(png)
 }
 

@@ -196,6 +196,7 @@ impl Compare {
             quality: r.quality.clone(),
             backend: r.backend,
             out: self.out.clone(),
+            overwrite: false,
             exposure: r.exposure,
             components: false,
             profiling: ProfilingChoice::Auto,
@@ -228,6 +229,18 @@ impl Compare {
             );
         }
         check::int("`spp`", self.spp, 2, MAX_SPP)?;
+        once(
+            "`methods`",
+            self.methods.iter().map(|m| m.name().to_string()),
+        )?;
+        once("`samplers`", self.samplers.iter().map(|s| s.to_string()))?;
+        once("`vpls`", self.vpls.iter().map(|v| v.to_string()))?;
+        for sw in &self.sweep {
+            once(
+                &format!("`sweep` {sw}"),
+                sw.values.iter().map(|x| x.to_string()),
+            )?;
+        }
         if let Some(v) = self.show_vpls {
             if !self.vpls.contains(&v) {
                 bail!("`show_vpls` {v} is not one of `vpls` {:?}", self.vpls);
@@ -283,4 +296,15 @@ impl Compare {
     pub fn scene_name(&self) -> &str {
         self.sequence.scene_or(DEFAULT_ANIMATED_SCENE)
     }
+}
+/// Each entry of the list `setting` once: a repeated one would be run (or swept) twice and
+/// drawn as two curves on top of each other.
+fn once(setting: &str, items: impl Iterator<Item = String>) -> Result<()> {
+    let mut seen = std::collections::BTreeSet::new();
+    for it in items {
+        if !seen.insert(it.clone()) {
+            bail!("{setting} lists {it} twice: name each entry once");
+        }
+    }
+    Ok(())
 }

@@ -30,6 +30,9 @@ pub struct Metrics {
         arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")
     )]
     pub camera: Option<CameraSpec>,
+    /// With --scene: let a glTF scene read files outside its own folder
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub allow_outside_paths: bool,
 }
 
 impl Default for Metrics {
@@ -41,6 +44,7 @@ impl Default for Metrics {
             scene: None,
             fps: 24.0,
             camera: None,
+            allow_outside_paths: false,
         }
     }
 }

@@ -64,6 +64,10 @@ pub struct Render {
     /// Output folder
     #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Render::default().out))]
     pub out: PathBuf,
+    /// Replace frame files, preview.gif, run.json or frames.jsonl in the output folder that
+    /// no earlier irad run recorded writing (its .irad-manifest.json); refused by default
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub overwrite: bool,
     /// Exposure of the PNG previews (EXR files are linear, unscaled)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
@@ -157,6 +161,7 @@ impl Default for Render {
             quality: Quality::default(),
             backend: BackendChoice::Auto,
             out: PathBuf::from("out"),
+            overwrite: false,
             exposure: 1.0,
             components: false,
             profiling: ProfilingChoice::Auto,
@@ -176,6 +181,14 @@ impl Render {
         }
         self.sampler.validate(self.vpls)?;
         self.quality.validate()?;
+        if self.quality.light_samples > 0 {
+            // Before any device is opened or folder made (the renderer checks again, with
+            // the adapter's limits and the count `--light-samples 0` chooses).
+            crate::gpu::renderer::check_shadow_maps(
+                self.quality.light_samples,
+                self.quality.shadow_size,
+            )?;
+        }
         check_exposure(self.exposure)
     }
 
@@ -197,6 +210,10 @@ pub struct Reference {
     /// Output folder
     #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Reference::default().out))]
     pub out: PathBuf,
+    /// Replace frame files or run.json in the output folder that no earlier irad run
+    /// recorded writing (its .irad-manifest.json); refused by default
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub overwrite: bool,
     /// Exposure of the PNG previews (the EXR files are linear, unscaled)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
@@ -212,6 +229,7 @@ impl Default for Reference {
             sequence: Sequence::default(),
             spp: 256,
             out: PathBuf::from("out/reference"),
+            overwrite: false,
             exposure: 1.0,
         }
     }
@@ -323,7 +341,11 @@ impl Bench {
         }
         check::int("`repeat`", self.repeat, 1, 10_000)?;
         for &c in &self.cases {
-            self.case(c).validate()?;
+            // The case's VPL count is its own, not `vpls` (which bench does not take).
+            check::int(&format!("`configs` {c}: the VPL count"), c.vpls, 1, 65535)?;
+            self.case(c)
+                .validate()
+                .map_err(|e| anyhow::anyhow!("`configs` {c}: {e}"))?;
         }
         Ok(())
     }

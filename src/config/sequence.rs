@@ -209,9 +209,14 @@ impl CameraSpec {
     }
 }
 
-/// Loads a built-in scene or a glTF file and prints its warnings.
+/// Loads a built-in scene or a glTF file (nothing outside its folder) and prints its warnings.
 pub fn load_scene(spec: &str) -> Result<Scene> {
-    let scene = crate::scene::builtin::load_any(spec)?;
+    load_scene_with(spec, &Default::default())
+}
+
+/// Loads a built-in scene or a glTF file and prints its warnings.
+pub fn load_scene_with(spec: &str, options: &crate::scene::load::LoadOptions) -> Result<Scene> {
+    let scene = crate::scene::builtin::load_any_with(spec, options)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
@@ -244,6 +249,10 @@ pub struct Sequence {
         arg(long, allow_hyphen_values = true, value_name = "EYE:TARGET:FOV")
     )]
     pub camera: Option<CameraSpec>,
+    /// Let a glTF scene read buffer and image files outside its own folder (absolute URIs,
+    /// `..`, symbolic links leading out); refused by default
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub allow_outside_paths: bool,
 }
 
 impl Default for Sequence {
@@ -258,6 +267,7 @@ impl Default for Sequence {
             fps: 24.0,
             seed: 1,
             camera: None,
+            allow_outside_paths: false,
         }
     }
 }
@@ -272,11 +282,17 @@ impl Sequence {
     }
     /// Loads the scene named (or `default`), prints its warnings, and puts `--camera` in it.
     pub fn load_scene(&self, default: &str) -> Result<Scene> {
-        let mut scene = load_scene(self.scene_or(default))?;
+        let mut scene = load_scene_with(self.scene_or(default), &self.load_options())?;
         if let Some(c) = &self.camera {
             c.apply(&mut scene)?;
         }
         Ok(scene)
+    }
+    /// How the scene's files are read.
+    pub fn load_options(&self) -> crate::scene::load::LoadOptions {
+        crate::scene::load::LoadOptions {
+            allow_outside_paths: self.allow_outside_paths,
+        }
     }
     /// The scene named, or `default`.
     pub fn scene_or<'a>(&'a self, default: &'a str) -> &'a str {

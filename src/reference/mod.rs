@@ -84,10 +84,28 @@ pub fn render(
 }
 
 /// Solid-angle pdf of sampling point `y` on emitter triangle `tri` from a point at squared
-/// distance `d2` with cosine `cos_l` at the emitter.
+/// distance `d2` with cosine `cos_l` at the emitter. 0 for a triangle next-event estimation
+/// never samples: one that emits at some points but not on average (an emissive texture
+/// black at every point its mean is taken at), so that it is not in the emitter list; light
+/// reaching it by a scattered ray then carries the whole weight.
 fn light_pdf(frame: &Frame, tri: usize, d2: f32, cos_l: f32) -> f32 {
-    let e = frame.emitter_of_tri[tri] as usize;
-    frame.emitters.prob(e) / frame.areas[tri] * d2 / cos_l
+    match frame.emitter_of_tri.get(tri) {
+        Some(&e) if e != u32::MAX && frame.areas[tri] > 0.0 && cos_l > 0.0 => {
+            frame.emitters.prob(e as usize) / frame.areas[tri] * d2 / cos_l
+        }
+        _ => 0.0,
+    }
+}
+
+/// The power heuristic's weight of the strategy with pdf `a` against the one with pdf `b`:
+/// 0 when neither could have made the sample (or a pdf is not finite), never NaN.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let w = a * a / (a * a + b * b);
+    if w.is_finite() {
+        w
+    } else {
+        0.0
+    }
 }
 
 /// Radiance arriving at `origin` from direction `dir` (unit).
@@ -111,7 +129,7 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
             } else {
                 let cos_l = -ng.dot(d);
                 let pl = light_pdf(frame, tri, h.t * h.t, cos_l);
-                l += beta * le * (pdf_bsdf * pdf_bsdf / (pdf_bsdf * pdf_bsdf + pl * pl));
+                l += beta * le * power_heuristic(pdf_bsdf, pl);
             }
         }
         let rho = frame.albedo_at(tri, h.b1, h.b2);
@@ -130,10 +148,9 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
             let wn = w / d2.sqrt();
             let cos_x = n.dot(wn);
             let cos_l = -frame.normals[lt].dot(wn);
-            if cos_x > 0.0 && cos_l > 0.0 && !tracer.occluded(x, n, y, frame.normals[lt]) {
-                let pl = light_pdf(frame, lt, d2, cos_l);
-                let pb = cos_x / PI;
-                let mis = pl * pl / (pl * pl + pb * pb);
+            let pl = light_pdf(frame, lt, d2, cos_l);
+            if cos_x > 0.0 && pl > 0.0 && !tracer.occluded(x, n, y, frame.normals[lt]) {
+                let mis = power_heuristic(pl, cos_x / PI);
                 l += beta * rho / PI * frame.emission_at(lt, b.x, b.y) * (cos_x / pl * mis);
             }
         }

@@ -3,6 +3,9 @@
 pub mod charts;
 pub mod heatmap;
 pub mod html;
+mod run_dir;
+
+pub use run_dir::{prepare_run_dir, run_files, RunDir, MANIFEST};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -162,46 +165,6 @@ pub fn is_run_output(name: &str) -> bool {
     digits.len() >= 4 && digits.bytes().all(|b| b.is_ascii_digit())
 }
 
-/// Removes the files an earlier run wrote into `dir` (see [`is_run_output`]), so a new run's
-/// frames are never mixed with an old run's; other files are left alone. Returns how many
-/// were removed.
-pub fn remove_earlier_run(dir: &Path) -> Result<usize> {
-    let mut removed = 0;
-    let entries = match std::fs::read_dir(dir) {
-        Ok(e) => e,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
-        Err(e) => return Err(e).with_context(|| format!("{}: cannot list", dir.display())),
-    };
-    for entry in entries {
-        let entry = entry.with_context(|| format!("{}: cannot list", dir.display()))?;
-        let name = entry.file_name();
-        if is_run_output(&name.to_string_lossy()) && entry.path().is_file() {
-            std::fs::remove_file(entry.path()).with_context(|| {
-                format!(
-                    "{}: cannot remove an earlier run's file",
-                    entry.path().display()
-                )
-            })?;
-            removed += 1;
-        }
-    }
-    Ok(removed)
-}
-
-/// Prepares an output folder for a run that writes frames: creates it, checks it is
-/// writable, and removes an earlier run's frame files, saying so on stderr.
-pub fn prepare_run_dir(dir: &Path) -> Result<()> {
-    prepare_out_dir(dir)?;
-    let n = remove_earlier_run(dir)?;
-    if n > 0 {
-        eprintln!(
-            "note: removed {n} files of an earlier run from {} (frame_*.exr|png, preview.gif, run.json, frames.jsonl)",
-            dir.display()
-        );
-    }
-    Ok(())
-}
-
 /// Appends one JSON record a line to `path` (JSON Lines): a long run's per-frame records are
 /// written as they come, never rewritten.
 pub struct JsonLines {
@@ -241,7 +204,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn only_irads_own_run_files_count_as_an_earlier_run() {
+    fn only_irads_output_shapes_count_as_run_outputs() {
         for yes in [
             "frame_0000.exr",
             "frame_0012.png",
@@ -265,13 +228,5 @@ mod tests {
         ] {
             assert!(!is_run_output(no), "{no}");
         }
-        let dir = std::env::temp_dir().join(format!("irad-stale-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        for n in ["frame_0000.png", "frame_0001.exr", "keep.txt"] {
-            std::fs::write(dir.join(n), b"x").unwrap();
-        }
-        assert_eq!(remove_earlier_run(&dir).unwrap(), 2);
-        assert!(dir.join("keep.txt").exists() && !dir.join("frame_0000.png").exists());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

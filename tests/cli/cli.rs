@@ -536,3 +536,94 @@ fn a_newcomers_slips_get_plain_answers() {
         "{text}"
     );
 }
+
+/// Issue 24 item 3: a scene whose buffer lies outside its folder is refused by every command
+/// that loads scenes, naming the URI and `--allow-outside-paths`, which lets it load.
+#[test]
+fn a_buffer_outside_the_scene_folder_needs_allow_outside_paths() {
+    use base64::Engine;
+    let top = tmp("outside");
+    let dir = top.join("scene");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.gltf"))
+        .unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let uri = doc["buffers"][0]["uri"].as_str().unwrap().to_string();
+    let bin = base64::engine::general_purpose::STANDARD
+        .decode(uri.split_once(',').unwrap().1)
+        .unwrap();
+    std::fs::write(top.join("outside.bin"), bin).unwrap();
+    doc["buffers"][0]["uri"] = serde_json::json!("../outside.bin");
+    let scene = dir.join("s.gltf");
+    std::fs::write(&scene, doc.to_string()).unwrap();
+    let scene = scene.to_str().unwrap();
+    let out = top.join("out");
+    let out = out.to_str().unwrap();
+    let reference = [
+        "reference",
+        scene,
+        "--size",
+        "4x4",
+        "--spp",
+        "1",
+        "--out",
+        out,
+    ];
+    for args in [&["scenes", scene][..], &reference[..]] {
+        let o = irad(args);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(e.contains("buffer 0 refers to '../outside.bin'"), "{e}");
+        assert!(e.contains("--allow-outside-paths"), "{e}");
+        let o = irad(&[args, &["--allow-outside-paths"]].concat());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{args:?}: {e}");
+    }
+}
+
+/// Issue 24 item 7: shadow maps past the memory cap and a candidate count past its cap are
+/// refused before any work, naming their flags, and no output folder is made.
+#[test]
+fn oversized_shadow_maps_and_candidates_are_refused_before_any_folder() {
+    let out = tmp("too-big");
+    let o = out.to_str().unwrap();
+    for (args, flags) in [
+        (
+            &["--shadow-size", "4096", "--light-samples", "64"][..],
+            &["--shadow-size", "--light-samples", "4 GiB"][..],
+        ),
+        (
+            &["--sampler", "mh", "--candidates", "16777216"][..],
+            &["--candidates", "1048576"][..],
+        ),
+    ] {
+        let base = ["render", "cornell", "--frames", "0..1", "--out", o];
+        let r = irad(&[&base[..], args].concat());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} ran");
+        for f in flags {
+            assert!(err.contains(f), "{f} missing: {err}");
+        }
+        assert!(!out.exists(), "{args:?} made {o}");
+    }
+}
+
+/// Issue 24 item 8: `irad bench` refuses the flags it would ignore (each --configs entry sets
+/// the VPL count and size), and a bad --configs entry is named as such.
+#[test]
+fn bench_refuses_flags_it_ignores_and_names_configs() {
+    for (args, expect) in [
+        (&["--vpls", "0"][..], "--vpls is not used by `irad bench`"),
+        (&["--size", "64x64"], "--size is not used by `irad bench`"),
+        (
+            &["--configs", "0@64x64"],
+            "--configs 0@64x64: the VPL count 0 is out of range",
+        ),
+    ] {
+        let r = irad(&[&["bench"][..], args].concat());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{args:?} ran");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("--vpls 0 is"), "{err}");
+    }
+}

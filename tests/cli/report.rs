@@ -329,3 +329,65 @@ fn compare_writes_tables_charts_and_a_report_that_loads_in_a_browser() {
     let _ = std::fs::remove_dir_all(&cache);
     let _ = std::fs::remove_dir_all(&again_out);
 }
+
+/// Issue 24 item 8: a list that names an entry twice is refused naming the flag and the
+/// entry, before any reference is traced.
+#[test]
+fn compare_refuses_duplicate_entries_naming_them() {
+    let out = tmp("dupes");
+    let cache = tmp("dupes-cache");
+    for (args, expect) in [
+        (
+            &["--samplers", "uniform,mh,uniform"][..],
+            "--samplers lists uniform twice",
+        ),
+        (
+            &["--methods", "instant,instant"],
+            "--methods lists instant twice",
+        ),
+        (&["--vpls", "16,32,16"], "--vpls lists 16 twice"),
+        (
+            &["--sweep", "mh:mh-rate=0.1,1,0.10"],
+            "--sweep mh:mh-rate=0.1,1,0.1 lists 0.1 twice",
+        ),
+    ] {
+        let o = compare(args, &out, &cache);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} was accepted");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(
+            !cache.join("reference").exists(),
+            "{args:?} traced a reference"
+        );
+    }
+}
+
+/// Issue 24 item 8: a cached reference frame cut short (a full disk, a kill) is traced again
+/// with a note, and the comparison goes on.
+#[test]
+fn a_truncated_cached_reference_frame_is_traced_again() {
+    let out = tmp("truncated");
+    let cache = tmp("truncated-cache");
+    let args = ["--samplers", "uniform", "--vpls", "8"];
+    let o = compare(&args, &out, &cache);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let frame = std::fs::read_dir(cache.join("reference"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path()
+        .join("a/frame_0002.exr");
+    let whole = std::fs::read(&frame).unwrap();
+    std::fs::write(&frame, &whole[..whole.len() / 2]).unwrap();
+    let o = compare(&args, &out, &cache);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("frame_0002.exr: the cached reference frame is unusable")
+            && err.contains("tracing it again"),
+        "{err}"
+    );
+    // Traced again with the same seed: the same bytes as the first time.
+    assert_eq!(std::fs::read(&frame).unwrap(), whole);
+}

@@ -517,3 +517,185 @@ fn run_json_records_what_the_raster_passes_drew() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Issue 24 item 4: a folder holding a user's own files of irad's output shapes is refused
+/// (naming one and --overwrite), leaving every file as it was; --overwrite replaces them; a
+/// second run into irad's own folder removes only what the first recorded writing.
+#[test]
+fn a_users_files_in_the_output_folder_are_never_deleted_without_overwrite() {
+    let out = tmp("users-files");
+    let o = out.to_str().unwrap();
+    let mine = [
+        "frame_0005.exr",
+        "frame_12345.exr",
+        "frame_0001_direct.exr",
+        "preview.gif",
+        "run.json",
+    ];
+    std::fs::create_dir_all(&out).unwrap();
+    for f in mine {
+        std::fs::write(out.join(f), format!("mine: {f}")).unwrap();
+    }
+    let args = [
+        "reference",
+        "cornell",
+        "--size",
+        "4x4",
+        "--spp",
+        "1",
+        "--out",
+        o,
+    ];
+    let r = irad(&args);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{err}");
+    assert!(
+        err.contains("frame_0001_direct.exr") && err.contains("4 more"),
+        "{err}"
+    );
+    assert!(err.contains("--overwrite"), "{err}");
+    for f in mine {
+        assert_eq!(
+            std::fs::read_to_string(out.join(f)).unwrap(),
+            format!("mine: {f}")
+        );
+    }
+    assert!(!out.join("frame_0000.exr").exists());
+    // --overwrite replaces them.
+    let r = irad(&[&args[..], &["--overwrite"]].concat());
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(!out.join("frame_0005.exr").exists() && out.join("frame_0000.exr").exists());
+    assert!(std::fs::read_to_string(out.join("run.json"))
+        .unwrap()
+        .contains("\"reference\""));
+    // A second run into the folder irad wrote just works, and leaves other files alone.
+    std::fs::write(out.join("notes.txt"), b"mine").unwrap();
+    let r = irad(&[&args[..], &["--frames", "2"]].concat());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(err.contains("removed 3 files of an earlier run"), "{err}");
+    assert_eq!(frame_files(&out), ["frame_0002.exr", "frame_0002.png"]);
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
+    let manifest = std::fs::read_to_string(out.join(".irad-manifest.json")).unwrap();
+    assert!(
+        manifest.contains("frame_0002.exr") && !manifest.contains("frame_0000"),
+        "{manifest}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// Issue 24 item 5: SIGINT after the first frames stops a render cleanly: exit status 130,
+/// run.json marked interrupted and listing the frames done (as frames.jsonl does), the GIF
+/// of those frames, no temporary file; the next run into the folder proceeds and removes a
+/// stray temporary that a killed run left.
+#[test]
+fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
+    let out = tmp("sigint");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["render", "cornell-orbit", "--size", "32x32", "--out", o];
+    args.extend_from_slice(CHEAP);
+    let mut child = common::irad_command()
+        .args([&args[..], &["--frames", "0..2000"]].concat())
+        .env_remove("XDG_RUNTIME_DIR")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.join("frame_0002.png").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["interrupted"], true);
+    let done = run["frames"].as_array().unwrap().len();
+    assert!((3..2000).contains(&done), "{done} frames");
+    assert_eq!(run["frames_rendered"], done);
+    let lines = std::fs::read_to_string(out.join("frames.jsonl")).unwrap();
+    assert_eq!(lines.lines().count(), done);
+    assert_eq!(frame_files(&out).len(), 2 * done, "{:?}", frame_files(&out));
+    let gif = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(out.join("preview.gif")).unwrap(),
+    ))
+    .unwrap();
+    let gif_frames = image::AnimationDecoder::into_frames(gif).count();
+    assert_eq!(gif_frames, done);
+    let names = || -> Vec<String> {
+        std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert!(
+        !names().iter().any(|n| n.contains(".tmp-")),
+        "{:?}",
+        names()
+    );
+    // A killed run's temporary (pid 4000000, not running) goes; the next run proceeds.
+    std::fs::write(out.join(".preview.gif.tmp-4000000.gif"), b"GIF89a").unwrap();
+    let next = irad(&[&args[..], &["--frames", "0..2"]].concat());
+    assert!(
+        next.status.success(),
+        "{}",
+        String::from_utf8_lossy(&next.stderr)
+    );
+    assert!(
+        !names().iter().any(|n| n.contains(".tmp-")),
+        "{:?}",
+        names()
+    );
+    assert_eq!(frame_files(&out).len(), 4);
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+/// `irad reference` stops the same way: the frame in flight finished, run.json marked
+/// interrupted, exit status 130.
+#[test]
+fn sigint_stops_a_reference_cleanly() {
+    let out = tmp("sigint-reference");
+    let o = out.to_str().unwrap();
+    let args = [
+        "reference",
+        "cornell-orbit",
+        "--size",
+        "16x16",
+        "--spp",
+        "4",
+    ];
+    let mut child = common::irad_command()
+        .args([&args[..], &["--frames", "0..20000", "--out", o]].concat())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !out.join("frame_0002.png").exists() {
+        assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = child.wait().unwrap();
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["interrupted"], true);
+    let done = run["frames"].as_array().unwrap().len();
+    assert!((3..20000).contains(&done), "{done} frames");
+    assert_eq!(frame_files(&out).len(), 2 * done);
+    std::fs::remove_dir_all(&out).unwrap();
+}

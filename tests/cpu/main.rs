@@ -6,6 +6,7 @@
 mod common;
 
 mod helpers;
+mod hostile;
 mod samplers;
 mod scene_files;
 mod scene_fuzz;

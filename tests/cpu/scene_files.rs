@@ -9,14 +9,20 @@ use std::time::{Duration, Instant};
 
 /// A glTF under construction: one embedded buffer, accessors added one by one.
 #[derive(Default)]
-struct Gltf {
-    bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
+pub(crate) struct Gltf {
+    pub(crate) bin: Vec<u8>,
+    pub(crate) views: Vec<Value>,
+    pub(crate) accessors: Vec<Value>,
 }
 
 impl Gltf {
-    fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, component: u32) -> usize {
+    pub(crate) fn accessor(
+        &mut self,
+        bytes: &[u8],
+        count: usize,
+        ty: &str,
+        component: u32,
+    ) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
@@ -28,10 +34,10 @@ impl Gltf {
         }));
         self.accessors.len() - 1
     }
-    fn floats(&mut self, v: &[f32], ty: &str, per: usize) -> usize {
+    pub(crate) fn floats(&mut self, v: &[f32], ty: &str, per: usize) -> usize {
         self.accessor(bytemuck::cast_slice(v), v.len() / per, ty, 5126)
     }
-    fn positions(&mut self, p: &[[f32; 3]]) -> usize {
+    pub(crate) fn positions(&mut self, p: &[[f32; 3]]) -> usize {
         let acc = self.floats(p.as_flattened(), "VEC3", 3);
         let (lo, hi) = p
             .iter()
@@ -45,11 +51,11 @@ impl Gltf {
         self.accessors[acc]["max"] = json!(hi);
         acc
     }
-    fn indices(&mut self, i: &[u32]) -> usize {
+    pub(crate) fn indices(&mut self, i: &[u32]) -> usize {
         self.accessor(bytemuck::cast_slice(i), i.len(), "SCALAR", 5125)
     }
     /// The whole file: `doc` plus this buffer, its views and accessors.
-    fn finish(self, mut doc: Value) -> Value {
+    pub(crate) fn finish(self, mut doc: Value) -> Value {
         doc["asset"] = json!({ "version": "2.0" });
         doc["accessors"] = json!(self.accessors);
         doc["bufferViews"] = json!(self.views);
@@ -63,12 +69,12 @@ impl Gltf {
 }
 
 /// A unit quad in the plane z = `z`, facing +z, as four vertices.
-fn quad(z: f32) -> [[f32; 3]; 4] {
+pub(crate) fn quad(z: f32) -> [[f32; 3]; 4] {
     [[0., 0., z], [1., 0., z], [1., 1., z], [0., 1., z]]
 }
 
 /// Materials: 0 white, 1 emitting 1 (front only).
-fn materials() -> Value {
+pub(crate) fn materials() -> Value {
     json!([
         { "pbrMetallicRoughness": { "baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0 } },
         { "pbrMetallicRoughness": { "metallicFactor": 0.0 }, "emissiveFactor": [1.0, 1.0, 1.0] },
@@ -77,7 +83,7 @@ fn materials() -> Value {
 
 /// A lit scene: a white floor quad (mesh 0) facing a light quad above it (mesh 1) facing
 /// down, nodes 0 and 1, and a camera node 2 at z = 3 looking down -z.
-fn lit() -> (Gltf, Value) {
+pub(crate) fn lit() -> (Gltf, Value) {
     let mut g = Gltf::default();
     let floor = g.positions(&quad(0.0));
     let light = g.positions(&quad(1.0));
@@ -102,11 +108,11 @@ fn lit() -> (Gltf, Value) {
 }
 
 /// Loads a document, failing the test if loading takes more than 10 s (a hang).
-fn load(doc: &Value) -> Result<Scene, String> {
+pub(crate) fn load(doc: &Value) -> Result<Scene, String> {
     load_bytes(doc.to_string().into_bytes(), "test.gltf")
 }
 
-fn load_bytes(bytes: Vec<u8>, file: &'static str) -> Result<Scene, String> {
+pub(crate) fn load_bytes(bytes: Vec<u8>, file: &'static str) -> Result<Scene, String> {
     let start = Instant::now();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -120,7 +126,7 @@ fn load_bytes(bytes: Vec<u8>, file: &'static str) -> Result<Scene, String> {
     r
 }
 
-fn refused(doc: &Value, words: &[&str]) {
+pub(crate) fn refused(doc: &Value, words: &[&str]) {
     let e = load(doc).expect_err("a hostile file was accepted");
     assert!(e.starts_with("test.gltf: "), "{e}");
     for w in words {

@@ -3,11 +3,18 @@
 //! load or be refused within a time bound, without a panic, and a scene that loads must
 //! evaluate to finite triangles, a usable camera and finite emitted power.
 //!
-//! The test runs 300 cases; `IRAD_FUZZ_CASES=100000 cargo test --release --test cpu scene_fuzz`
-//! runs more (and `IRAD_FUZZ_FIRST=N` starts at case N, to reproduce one).
+//! Case kinds 4 and 5 are the hostile ones of issue 24: huge node translations and vertices,
+//! buffer and image URIs naming special files (`/dev/zero`) or leading out of the folder, and
+//! emissive textures black almost everywhere (then a loaded scene is also path-traced at 4 x 4,
+//! which once panicked); kind 5 loads with `allow_outside_paths`.
+//!
+//! The test runs 300 cases; `IRAD_FUZZ_CASES=20000 cargo test --release --test cpu scene_fuzz`
+//! runs more (and `IRAD_FUZZ_FIRST=N` starts at case N, to reproduce one; `IRAD_FUZZ_SHOW=1`
+//! prints why each refused case was refused).
 
 use base64::Engine;
-use irad::scene::{builtin, load::load_slice};
+use irad::scene::builtin;
+use irad::scene::load::{load_slice, load_slice_with, LoadOptions};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use serde_json::{json, Value};
@@ -202,14 +209,115 @@ fn spec_features() -> Value {
     v
 }
 
+/// Values a hostile mutation writes as coordinates: past irad's limit (1e9), near f32's end,
+/// and infinite.
+const HUGE: &[f32] = &[
+    1.0e9 + 64.0,
+    -1.0e10,
+    1.0e15,
+    1.0e30,
+    -3.4e38,
+    f32::INFINITY,
+];
+
+/// URIs that name special files, folders, or files outside the scene's folder.
+const HOSTILE_URIS: &[&str] = &[
+    "/dev/zero",
+    "/dev/urandom",
+    "/dev/null",
+    "/dev/full",
+    "/proc/self/status",
+    "/etc/passwd",
+    "/tmp",
+    ".",
+    "../outside.bin",
+    "../../../../etc/hostname",
+    "%2e%2e/%2e%2e/etc/passwd",
+    "sub/../../x.bin",
+    "%2Fdev%2Fzero",
+];
+
+/// One hostile mutation (issue 24) of a seed, then maybe ordinary ones.
+fn mutate_hostile(v: &mut Value, r: &mut Pcg64) {
+    match r.random_range(0..5) {
+        0 => {
+            // A node moved far away.
+            let n = v["nodes"].as_array().map_or(0, |a| a.len());
+            if n > 0 {
+                let t: Vec<f32> = (0..3)
+                    .map(|_| HUGE[r.random_range(0..HUGE.len())])
+                    .collect();
+                let t: Vec<Value> = t.iter().map(|&x| json!(x as f64)).collect();
+                v["nodes"][r.random_range(0..n)]["translation"] = json!(t);
+            }
+        }
+        1 => {
+            // Vertices (or anything else in the buffer) overwritten with huge values.
+            let Some(uri) = v["buffers"][0]["uri"].as_str() else {
+                return;
+            };
+            let Some((head, b64)) = uri.split_once(',') else {
+                return;
+            };
+            let engine = &base64::engine::general_purpose::STANDARD;
+            let Ok(mut bin) = engine.decode(b64) else {
+                return;
+            };
+            for _ in 0..r.random_range(1..=8) {
+                if bin.len() >= 4 {
+                    let at = r.random_range(0..bin.len() / 4) * 4;
+                    let x = HUGE[r.random_range(0..HUGE.len())];
+                    bin[at..at + 4].copy_from_slice(&x.to_le_bytes());
+                }
+            }
+            v["buffers"][0]["uri"] = json!(format!("{head},{}", engine.encode(&bin)));
+        }
+        2 | 3 => {
+            // A buffer's or an image's URI naming a special file or leading out.
+            let uri = HOSTILE_URIS[r.random_range(0..HOSTILE_URIS.len())];
+            let images = v["images"].as_array().map_or(0, |a| a.len());
+            if images > 0 && r.random_bool(0.5) {
+                v["images"][r.random_range(0..images)] = json!({ "uri": uri });
+            } else {
+                v["buffers"][0]["uri"] = json!(uri);
+            }
+        }
+        _ => {
+            // An emissive texture black almost everywhere on the floor that faces the camera.
+            *v = crate::hostile::floor_emits_where_its_mean_does_not();
+            let side = [2u32, 3, 4, 16][r.random_range(0..4)];
+            let texels: Vec<[u8; 4]> = (0..side * side)
+                .map(|_| match r.random_bool(0.1) {
+                    true => [255, 255, 255, 255],
+                    false => [0, 0, 0, 255],
+                })
+                .collect();
+            let png = crate::hostile::png(side, side, &texels);
+            let data = base64::engine::general_purpose::STANDARD.encode(png);
+            v["images"][0]["uri"] = json!(format!("data:image/png;base64,{data}"));
+            let filter = [9728, 9729][r.random_range(0..2)];
+            v["samplers"][0]["magFilter"] = json!(filter);
+        }
+    }
+    if r.random_bool(0.3) {
+        mutate_json(v, r);
+    }
+}
+
 /// Case `i`: which seed file and which kind of mutation come from `i`; the rest from a PCG
-/// stream seeded with `i`.
+/// stream seeded with `i`. Kinds 4 and 5 are the hostile ones (kind 5 loaded with
+/// `allow_outside_paths`).
 fn case(i: u64, seeds: &[(&str, Value)], glbs: &[Vec<u8>]) -> Vec<u8> {
     let mut r = Pcg64::seed_from_u64(i);
-    match i % 4 {
+    match i % 6 {
         0 | 1 => {
             let mut v = seeds[(i / 4) as usize % seeds.len()].1.clone();
             mutate_json(&mut v, &mut r);
+            v.to_string().into_bytes()
+        }
+        4 | 5 => {
+            let mut v = seeds[(i / 6) as usize % seeds.len()].1.clone();
+            mutate_hostile(&mut v, &mut r);
             v.to_string().into_bytes()
         }
         2 => {
@@ -228,13 +336,26 @@ fn case(i: u64, seeds: &[(&str, Value)], glbs: &[Vec<u8>]) -> Vec<u8> {
     }
 }
 
-/// Whether one input loaded, or what went wrong with it.
-fn check(bytes: Vec<u8>) -> Result<bool, String> {
+/// Whether one input loaded, or what went wrong with it; `allow` loads it with
+/// `allow_outside_paths`.
+fn check(bytes: Vec<u8>, allow: bool) -> Result<bool, String> {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
-            let Ok(scene) = load_slice(&bytes, "fuzz.gltf", "fuzz", None) else {
-                return Ok(false);
+            let options = LoadOptions {
+                allow_outside_paths: allow,
+            };
+            let scene = match load_slice_with(&bytes, "fuzz.gltf", "fuzz", None, &options) {
+                Ok(s) => s,
+                Err(e) => {
+                    if std::env::var_os("IRAD_FUZZ_SHOW").is_some() {
+                        println!(
+                            "refused: {}",
+                            e.to_string().chars().take(200).collect::<String>()
+                        );
+                    }
+                    return Ok(false);
+                }
             };
             for t in [0.0, scene.duration() * 0.37, scene.duration()] {
                 let f = scene.at(t);
@@ -249,6 +370,19 @@ fn check(bytes: Vec<u8>) -> Result<bool, String> {
                         "loaded, but power or areas at t={t} are not finite"
                     ));
                 }
+            }
+            // The path tracer on what loaded: finite pixels, no panic.
+            let f = scene.at(0.0);
+            let tracer = irad::trace::Tracer::new(&f);
+            let s = irad::reference::ReferenceSettings {
+                width: 4,
+                height: 4,
+                spp: 2,
+                seed: 1,
+            };
+            let img = irad::reference::render(&f, &tracer, &s, &|| {});
+            if !img.data.iter().all(|p| p.is_finite()) {
+                return Err("loaded, but the path tracer gives pixels that are not finite".into());
             }
             Ok(true)
         }));
@@ -280,14 +414,28 @@ fn mutated_scene_files_never_panic_hang_or_lie() {
     let cases = env("IRAD_FUZZ_CASES", 300);
     let mut failures = Vec::new();
     let mut loaded = 0;
+    // Per case kind: [refused, loaded].
+    let mut by_kind = [[0u32; 2]; 6];
+    let start = std::time::Instant::now();
     for i in first..first + cases {
-        match check(case(i, &seeds, &glbs)) {
-            Ok(l) => loaded += l as usize,
+        match check(case(i, &seeds, &glbs), i % 6 == 5) {
+            Ok(l) => {
+                loaded += l as usize;
+                by_kind[(i % 6) as usize][l as usize] += 1;
+            }
             Err(why) => failures.push(format!("case {i}: {why}")),
         }
     }
+    println!(
+        "{cases} cases from {first} in {:.1} s; [refused, loaded] by kind (json, json, json bytes, glb bytes, hostile, hostile allowed outside): {by_kind:?}",
+        start.elapsed().as_secs_f64()
+    );
     // Some mutations must still load, or the checks on loaded scenes would test nothing.
     assert!(loaded > 0, "no case loaded");
+    assert!(
+        cases < 60 || (by_kind[4][1] > 0 && by_kind[4][0] > 0),
+        "the hostile kind loads none or refuses none: {by_kind:?}"
+    );
     assert!(
         failures.is_empty(),
         "{} failures:\n{}",

@@ -12,7 +12,7 @@
 use super::plan::{halves, Plan};
 use crate::config;
 use crate::image::Hdr;
-use anyhow::{bail, Result};
+use anyhow::Result;
 use std::path::PathBuf;
 
 /// The seed of half `h` (0: a, 1: b) of a reference traced with `seed`: two independent
@@ -62,16 +62,21 @@ fn half(plan: &Plan, h: usize, spp: u32, tick: &(dyn Fn() + Sync)) -> Result<Vec
             images.push(None);
             continue;
         }
-        let img = Hdr::read(&path)?;
-        if (img.width, img.height) != (size.width, size.height) {
-            bail!(
-                "{}: cached reference is {}x{}, not {size}",
-                path.display(),
-                img.width,
-                img.height
-            );
-        }
-        images.push(Some(img));
+        // A cached frame that cannot be read (cut short by a full disk or a kill) or is of
+        // another size is traced again, with a note, in place of failing the comparison.
+        let why = match Hdr::read(&path) {
+            Ok(img) if (img.width, img.height) == (size.width, size.height) => {
+                images.push(Some(img));
+                continue;
+            }
+            Ok(img) => format!("it is {}x{}, not {size}", img.width, img.height),
+            Err(e) => format!("{e:#}"),
+        };
+        eprintln!(
+            "note: {}: the cached reference frame is unusable ({why}); tracing it again",
+            path.display()
+        );
+        images.push(None);
     }
     let todo: Vec<u32> = plan
         .numbers

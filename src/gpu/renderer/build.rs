@@ -13,6 +13,32 @@ use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use std::collections::HashMap;
 
+/// The most bytes irad asks the adapter for in one texture (the shadow maps' array, the
+/// largest). wgpu reports no memory size, and an allocation past what the device holds fails
+/// late, as a device error after the output folder was made; 4 GiB is a cap most discrete
+/// GPUs hold and one the settings users need stay far below (the default shadow maps for 64
+/// samples take 84 MiB).
+pub const MAX_TEXTURE_BYTES: u64 = 4 << 30;
+
+/// The bytes of the shadow maps for `samples` emitter samples at `size`^2: 5 faces each, 4
+/// bytes a texel, and one depth buffer.
+pub fn shadow_bytes(samples: u32, size: u32) -> u64 {
+    (samples as u64 * 5 + 1) * (size as u64 * size as u64) * 4
+}
+
+/// The shadow maps for `samples` at `size` within [`MAX_TEXTURE_BYTES`].
+pub fn check_shadow_maps(samples: u32, size: u32) -> Result<()> {
+    let need = shadow_bytes(samples, size);
+    if need > MAX_TEXTURE_BYTES {
+        bail!(
+            "the shadow maps for `light_samples` {samples} at `shadow_size` {size} need {:.1} GiB ({samples} x 5 faces of {size}^2 texels, 4 bytes each), more than irad's cap of {} GiB for one texture: lower `shadow_size` or `light_samples`",
+            need as f64 / (1u64 << 30) as f64,
+            MAX_TEXTURE_BYTES >> 30
+        );
+    }
+    Ok(())
+}
+
 /// The checks that must pass before anything renders: sizes against the adapter's limits.
 pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
     if c.slots == 0 || c.slots > 65535 {
@@ -48,6 +74,7 @@ pub fn check_config(c: &RendererConfig, limits: &wgpu::Limits) -> Result<()> {
             limits.max_texture_array_layers / 5
         );
     }
+    check_shadow_maps(c.light_samples, c.shadow_size)?;
     if !(1..=8).contains(&c.aa) {
         bail!("`aa` {} is out of range (1 to 8)", c.aa);
     }

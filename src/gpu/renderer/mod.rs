@@ -8,7 +8,7 @@ mod build;
 pub mod graph;
 pub mod pass;
 
-pub use build::check_config;
+pub use build::{check_config, check_shadow_maps, shadow_bytes, MAX_TEXTURE_BYTES};
 use build::{Builder, Outputs, Shared};
 use graph::Passes;
 

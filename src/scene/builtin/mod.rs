@@ -64,8 +64,13 @@ pub fn load(name: &str) -> Option<Result<Scene, load::LoadError>> {
     find(name).map(|b| load::load_slice(b.gltf.as_bytes(), &format!("builtin:{name}"), name, None))
 }
 
-/// Loads a scene given as a built-in name or a path.
+/// Loads a scene given as a built-in name or a path, with the default options.
 pub fn load_any(spec: &str) -> anyhow::Result<Scene> {
+    load_any_with(spec, &load::LoadOptions::default())
+}
+
+/// Loads a scene given as a built-in name or a path.
+pub fn load_any_with(spec: &str, options: &load::LoadOptions) -> anyhow::Result<Scene> {
     if let Some(s) = load(spec) {
         return Ok(s?);
     }
@@ -87,7 +92,7 @@ pub fn load_any(spec: &str) -> anyhow::Result<Scene> {
                 .join(", ")
         );
     }
-    Ok(load::load_path(path)?)
+    Ok(load::load_path_with(path, options)?)
 }
 
 /// Levenshtein distance between two names (characters inserted, deleted or replaced).

@@ -2,7 +2,7 @@
 //! buffer, and read accessors (dense or sparse, any component type) with every offset checked,
 //! so that no file can make reading go past the data or panic.
 
-use super::{Ctx, LoadError};
+use super::{files, Ctx, LoadError};
 use gltf::accessor::{DataType, Dimensions};
 use std::path::Path;
 
@@ -13,63 +13,52 @@ pub(super) type Buffers = Vec<gltf::buffer::Data>;
 /// such an accessor costs memory without costing file size.
 const MAX_VIEWLESS: usize = 1 << 22;
 
-/// Loads every buffer (embedded, external or the .glb's BIN chunk) and checks the views.
+/// Loads every buffer (embedded, external or the .glb's BIN chunk) and checks the views. An
+/// external buffer is read through [`super::files`]: a regular file, at most its declared
+/// `byteLength`.
 pub(super) fn load(
     cx: &Ctx,
     doc: &gltf::Document,
     base: Option<&Path>,
-    blob: Option<Vec<u8>>,
+    mut blob: Option<Vec<u8>>,
 ) -> Result<Buffers, LoadError> {
     let base = base.unwrap_or(Path::new("."));
-    check_external(cx, doc, base)?;
-    let buffers = gltf::import_buffers(doc, Some(base), blob).map_err(|e| match e {
-        gltf::Error::BufferLength {
-            buffer,
-            expected,
-            actual,
-        } => cx.err(format!(
-            "buffer {buffer} is short: it declares {expected} bytes but holds {actual}"
-        )),
-        gltf::Error::Io(io) => cx.err(format!("a buffer cannot be read: {io}")),
-        gltf::Error::MissingBlob => cx.err("the .glb has no BIN chunk but a buffer refers to it"),
-        other => cx.err(format!("a buffer cannot be loaded: {other}")),
-    })?;
+    let mut buffers = Vec::new();
+    for buf in doc.buffers() {
+        let what = format!("buffer {}", buf.index());
+        let declared = buf.length();
+        let mut data = match buf.source() {
+            gltf::buffer::Source::Bin => blob
+                .take()
+                .ok_or_else(|| cx.err("the .glb has no BIN chunk but a buffer refers to it"))?,
+            gltf::buffer::Source::Uri(uri) => match files::data_uri(uri) {
+                Some(d) => d.map_err(|e| cx.err(format!("{what} {e}")))?,
+                None => {
+                    let path = files::resolve(base, uri)
+                        .and_then(|p| files::check_inside(base, uri, &cx.options).map(|_| p))
+                        .map_err(|e| cx.err(format!("{what} {e}")))?;
+                    files::read_regular(&path, declared as u64).map_err(|e| {
+                        cx.err(format!(
+                            "{what} refers to '{uri}' ({}), which {e}",
+                            path.display()
+                        ))
+                    })?
+                }
+            },
+        };
+        if data.len() < declared {
+            return Err(cx.err(format!(
+                "{what} is short: it declares {declared} bytes but holds {}",
+                data.len()
+            )));
+        }
+        while !data.len().is_multiple_of(4) {
+            data.push(0);
+        }
+        buffers.push(gltf::buffer::Data(data));
+    }
     check_views(cx, doc, &buffers)?;
     Ok(buffers)
-}
-
-/// Every external buffer's URI is valid percent-encoded UTF-8 and names a file that exists,
-/// so that the message can name it.
-fn check_external(cx: &Ctx, doc: &gltf::Document, base: &Path) -> Result<(), LoadError> {
-    for buf in doc.buffers() {
-        let gltf::buffer::Source::Uri(uri) = buf.source() else {
-            continue;
-        };
-        if uri.starts_with("data:") {
-            continue;
-        }
-        if uri.contains(':') {
-            return Err(cx.err(format!(
-                "buffer {} refers to '{uri}': irad reads embedded data: URIs and relative file paths only",
-                buf.index()
-            )));
-        }
-        let decoded = urlencoding::decode(uri).map_err(|e| {
-            cx.err(format!(
-                "buffer {} has the URI '{uri}', which does not percent-decode to UTF-8: {e}",
-                buf.index()
-            ))
-        })?;
-        let full = base.join(&*decoded);
-        if let Err(e) = std::fs::metadata(&full) {
-            return Err(cx.err(format!(
-                "buffer {} refers to '{uri}' ({}), which cannot be read: {e}",
-                buf.index(),
-                full.display()
-            )));
-        }
-    }
-    Ok(())
 }
 
 fn check_views(cx: &Ctx, doc: &gltf::Document, buffers: &Buffers) -> Result<(), LoadError> {

@@ -65,9 +65,10 @@ fn primitive(
         Some(acc) => buffers::indices(cx, buffers, &acc, &what)?,
         None => (0..positions.len() as u32).collect(),
     };
-    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+    // Named by place, not value: the value is the file's bytes.
+    if let Some(bad) = indices.iter().position(|&i| i as usize >= positions.len()) {
         return Err(cx.err(format!(
-            "mesh {} has index {bad} but only {} vertices",
+            "mesh {} has index number {bad} beyond its {} vertices",
             mesh.index(),
             positions.len()
         )));
@@ -163,7 +164,8 @@ fn warn_ignored(cx: &mut Ctx, prim: &gltf::Primitive) {
 }
 
 /// POSITION as finite VEC3s within irad's coordinate limit (any component type, so
-/// KHR_mesh_quantization's integer positions read too).
+/// KHR_mesh_quantization's integer positions read too). A bad vertex is named by index, not
+/// value: the values are the file's bytes, which a message must not echo.
 fn positions(
     cx: &Ctx,
     mesh: &gltf::Mesh,
@@ -189,10 +191,9 @@ fn positions(
     let positions: Vec<Vec3> = flat.chunks_exact(3).map(Vec3::from_slice).collect();
     if let Some(bad) = positions.iter().position(|p| !p.is_finite()) {
         return Err(cx.err(format!(
-            "mesh {} ('{}') has a NaN or infinite position at vertex {bad}: {}",
+            "mesh {} ('{}') has a NaN or infinite position at vertex {bad}",
             mesh.index(),
             mesh.name().unwrap_or(""),
-            positions[bad]
         )));
     }
     if let Some(bad) = positions
@@ -200,10 +201,9 @@ fn positions(
         .position(|p| p.abs().max_element() > MAX_COORD)
     {
         return Err(cx.err(format!(
-            "mesh {} ('{}') has vertex {bad} at {}, beyond irad's coordinate limit of {MAX_COORD:e}",
+            "mesh {} ('{}') has vertex {bad} beyond irad's coordinate limit of {MAX_COORD:e}",
             mesh.index(),
             mesh.name().unwrap_or(""),
-            positions[bad]
         )));
     }
     Ok(positions)

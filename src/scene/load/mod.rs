@@ -11,6 +11,7 @@
 mod animation;
 mod buffers;
 mod camera;
+pub mod files;
 mod lights;
 mod material;
 mod mesh;
@@ -18,6 +19,7 @@ mod nodes;
 mod textures;
 
 pub use camera::FOV_RANGE;
+pub use files::LoadOptions;
 
 use super::{Camera, Scene};
 use glam::Vec3;
@@ -49,9 +51,11 @@ pub const MAX_TRIANGLES: usize = 1 << 24;
 /// The most times [`finish`] evaluates an animation at to check it.
 const CHECK_SAMPLES: usize = 64;
 
-/// What every part of the loader shares: the file's name for messages, and the warnings.
+/// What every part of the loader shares: the file's name for messages, the options, and the
+/// warnings.
 struct Ctx<'a> {
     file: &'a str,
+    options: LoadOptions,
     warnings: BTreeSet<String>,
 }
 
@@ -68,36 +72,55 @@ impl Ctx<'_> {
     }
 }
 
-/// Loads a scene from a file path.
+/// Loads a scene from a file path with the default options (nothing read from outside the
+/// file's folder).
 pub fn load_path(path: &Path) -> Result<Scene, LoadError> {
+    load_path_with(path, &LoadOptions::default())
+}
+
+/// Loads a scene from a file path.
+pub fn load_path_with(path: &Path, options: &LoadOptions) -> Result<Scene, LoadError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| LoadError {
+    let bytes = files::read_scene(path).map_err(|e| LoadError {
         file: file.clone(),
-        reason: format!("cannot read the file: {e}"),
+        reason: format!("the scene file {e}"),
     })?;
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| file.clone());
-    load_slice(&bytes, &file, &name, path.parent())
+    load_slice_with(&bytes, &file, &name, path.parent(), options)
 }
 
-/// Loads a scene from bytes; `file` names it in messages, `base` resolves external buffers.
+/// Loads a scene from bytes with the default options; `file` names it in messages, `base`
+/// resolves external buffers and images (None: the current folder).
 pub fn load_slice(
     bytes: &[u8],
     file: &str,
     name: &str,
     base: Option<&Path>,
 ) -> Result<Scene, LoadError> {
+    load_slice_with(bytes, file, name, base, &LoadOptions::default())
+}
+
+/// Loads a scene from bytes (see [`load_slice`]).
+pub fn load_slice_with(
+    bytes: &[u8],
+    file: &str,
+    name: &str,
+    base: Option<&Path>,
+    options: &LoadOptions,
+) -> Result<Scene, LoadError> {
     let mut cx = Ctx {
         file,
+        options: *options,
         warnings: BTreeSet::new(),
     };
     let gltf = parse(&cx, bytes)?;
     let doc = &gltf.document;
     let buffers = buffers::load(&cx, doc, base, gltf.blob.clone())?;
     warn_unused(&mut cx, doc);
-    let read = textures::read(&mut cx, doc, &buffers, base);
+    let read = textures::read(&mut cx, doc, &buffers, base)?;
     let mut index = Vec::with_capacity(read.len());
     let mut textures = Vec::new();
     for t in read {

@@ -4,25 +4,36 @@
 //! it, and the materials that use it fall back to their factors.
 
 use super::buffers::Buffers;
-use super::Ctx;
+use super::{files, Ctx, LoadError};
 use crate::scene::texture::{Filter, Texture, Wrap, MAX_SIDE};
-use base64::Engine;
 use gltf::texture::{MagFilter, WrappingMode};
 use std::path::Path;
 
-/// Every texture of the file by index (None: its image could not be read).
+/// Every texture of the file by index (None: its image could not be read). An image file
+/// outside the scene's folder is an error (unless the options allow it), not a warning.
 pub(super) fn read(
     cx: &mut Ctx,
     doc: &gltf::Document,
     buffers: &Buffers,
     base: Option<&Path>,
-) -> Vec<Option<Texture>> {
+) -> Result<Vec<Option<Texture>>, LoadError> {
+    for (i, img) in doc.as_json().images.iter().enumerate() {
+        let Some(uri) = img.uri.as_deref().filter(|u| !u.starts_with("data:")) else {
+            continue;
+        };
+        let dir = base.unwrap_or(Path::new("."));
+        if files::resolve(dir, uri).is_ok() {
+            files::check_inside(dir, uri, &cx.options)
+                .map_err(|e| cx.err(format!("image {i} {e}")))?;
+        }
+    }
     // Each image decoded once, however many textures share it.
     let images: Vec<Option<image::RgbaImage>> = doc
         .images()
         .map(|img| decode(cx, doc, &img, buffers, base))
         .collect();
-    doc.textures()
+    Ok(doc
+        .textures()
         .map(|t| {
             let img = images.get(t.source().index())?.as_ref()?;
             let s = t.sampler();
@@ -47,7 +58,7 @@ pub(super) fn read(
                 },
             })
         })
-        .collect()
+        .collect())
 }
 
 /// One image as RGBA8 (sRGB codes), at most [`MAX_SIDE`] on a side; None (with a warning
@@ -86,32 +97,26 @@ fn decode(
             }
         }
         (None, Some(uri)) => {
-            if let Some(rest) = uri.strip_prefix("data:") {
-                let Some((_, b64)) = rest.split_once(";base64,") else {
-                    return fail(cx, "has a data: URI that is not base64".into());
-                };
-                match base64::engine::general_purpose::STANDARD.decode(b64.trim()) {
+            if let Some(d) = files::data_uri(uri) {
+                match d {
                     Ok(b) => b,
-                    Err(e) => return fail(cx, format!("has a data: URI that is not base64 ({e})")),
+                    Err(e) => return fail(cx, e),
                 }
-            } else if uri.contains(':') {
-                return fail(
-                    cx,
-                    format!("refers to '{uri}', which is not a relative file path"),
-                );
             } else {
-                let Ok(name) = urlencoding::decode(uri) else {
-                    return fail(
-                        cx,
-                        format!("has the URI '{uri}', which does not percent-decode"),
-                    );
+                let path = match files::resolve(base.unwrap_or(Path::new(".")), uri) {
+                    Ok(p) => p,
+                    Err(e) => return fail(cx, e),
                 };
-                let path = base.unwrap_or(Path::new(".")).join(&*name);
-                match std::fs::read(&path) {
-                    Ok(b) => b,
-                    Err(e) => {
-                        return fail(cx, format!("file {} cannot be read ({e})", path.display()))
+                let limit = files::MAX_IMAGE_BYTES;
+                match files::read_regular(&path, limit + 1) {
+                    Ok(b) if b.len() as u64 > limit => {
+                        return fail(
+                            cx,
+                            format!("file {} is larger than {} MiB", path.display(), limit >> 20),
+                        )
                     }
+                    Ok(b) => b,
+                    Err(e) => return fail(cx, format!("file {} {e}", path.display())),
                 }
             }
         }

@@ -177,10 +177,15 @@ knobs! {
     /// Defensive floor of the importance, as a fraction of its mean
     eps: f32 = 0.05, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc];
     /// M: candidate VPLs a frame for cdf, mh and smc [default: 4 x --vpls]
-    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: 1 << 24 }, [Cdf, Mh, Smc];
+    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: MAX_CANDIDATES }, [Cdf, Mh, Smc];
     /// K: camera points for importance
     camera_points: u32 = 256, "camera-points", Int { lo: 1, hi: 1 << 20 }, [Cdf, Mh, Rejection, Smc];
 }
+
+/// The most candidate VPLs a frame (`candidates`): each costs a traced path and about 70
+/// bytes, so 2^20 is about 70 MiB and seconds a frame on the CPU (2^24 ran out of time at
+/// 1.1 GB).
+pub const MAX_CANDIDATES: u32 = 1 << 20;
 
 impl SamplerKnobs {
     /// Checks every knob against its range, naming its flag; `vpls` slots give the default M.
@@ -194,7 +199,7 @@ impl SamplerKnobs {
             "`candidates` (4 x `vpls`)",
             self.candidates(vpls),
             1,
-            1 << 24,
+            MAX_CANDIDATES,
         )
     }
     /// M for `vpls` slots: `--candidates`, or 4 a slot.
