@@ -3,7 +3,7 @@
 
 pub mod edges;
 
-use crate::scene::Frame;
+use crate::scene::{Frame, Sides};
 use glam::{Vec3, Vec3A};
 use obvhs::{cwbvh::CwBvh, ray::Ray, ray::RayHit, triangle::Triangle, BvhBuildParams};
 use std::time::Duration;
@@ -35,6 +35,21 @@ pub struct Tracer {
     /// The frame, kept when an alpha MASK can cut its triangles: a hit on a cut-away point
     /// is passed through.
     cutouts: Option<Box<Frame>>,
+    /// [`Frame::sides`]: which triangles are single-sided (None: none is).
+    sides: Option<Vec<u8>>,
+}
+
+/// Which faces of single-sided triangles a ray passes through (see docs/math.md,
+/// "Single-sided surfaces").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Facing {
+    /// A ray from a receiver (the eye, a shading point): their backs.
+    Seen,
+    /// A light path's ray: none (the caller ends the path on a back).
+    Any,
+    /// A ray from a light, looking for what shadows the receivers beyond: the fronts of open
+    /// ones (the receivers behind them see their backs).
+    Occluder,
 }
 
 /// A BVH over some of the frame's triangles.
@@ -102,14 +117,41 @@ impl Tracer {
             last_build_s: start.elapsed().as_secs_f64(),
             eps: 1e-4 * (hi - lo).max_element().max(1e-3),
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
+            sides: frame.sides(),
         }
+    }
+
+    /// A tracer over `frame` that treats every triangle as double-sided.
+    pub fn two_sided(frame: &Frame) -> Self {
+        let mut t = Tracer::new(frame);
+        t.sides = None;
+        t
+    }
+
+    /// Whether any triangle is single-sided.
+    pub fn has_single_sided(&self) -> bool {
+        self.sides.is_some()
     }
 
     /// Distance along `r` to the `id`-th triangle of `part`'s BVH, or infinity (a miss, or a
     /// point an alpha MASK cuts away).
-    fn hit_distance(&self, part: &Part, r: &Ray, id: usize) -> f32 {
+    fn hit_distance(&self, part: &Part, r: &Ray, id: usize, facing: Facing) -> f32 {
         let k =
             part.ids[part.bvh.as_ref().expect("traversed").primitive_indices[id] as usize] as usize;
+        if let Some(s) = &self.sides {
+            let side = s[k];
+            if side != Sides::DOUBLE && facing != Facing::Any {
+                let t = &self.tris[k];
+                let cos = (t.v1 - t.v0).cross(t.v2 - t.v0).dot(r.direction);
+                let passes = match facing {
+                    Facing::Seen => cos > 0.0,
+                    _ => side == Sides::OPEN && cos < 0.0,
+                };
+                if passes {
+                    return f32::INFINITY;
+                }
+            }
+        }
         let t = self.tris[k].intersect(r);
         if let Some(f) = &self.cutouts {
             if t < f32::INFINITY {
@@ -192,14 +234,40 @@ impl Tracer {
         self.eps
     }
 
-    /// Closest hit along `dir` (unit) from `origin`, within `tmax`.
+    /// Closest hit along `dir` (unit) from `origin`, within `tmax`, as a receiver there sees
+    /// it: through the backs of single-sided triangles.
     pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        self.intersect_facing(origin, dir, tmax, Facing::Seen)
+    }
+
+    /// Closest hit of a light path's ray, whichever side: a light path ends where it strikes
+    /// the back of a single-sided triangle ([`Tracer::single_sided`]).
+    pub fn intersect_light(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        self.intersect_facing(origin, dir, tmax, Facing::Any)
+    }
+
+    /// Closest occluder along a ray from a light (a VPL): what hides the receivers beyond it
+    /// from the light, passing through open single-sided triangles that face the light.
+    pub fn intersect_occluder(&self, origin: Vec3, dir: Vec3, tmax: f32) -> Option<Hit> {
+        self.intersect_facing(origin, dir, tmax, Facing::Occluder)
+    }
+
+    /// Whether triangle `tri` is single-sided (invisible from behind).
+    pub fn single_sided(&self, tri: u32) -> bool {
+        self.sides
+            .as_ref()
+            .is_some_and(|s| s[tri as usize] != Sides::DOUBLE)
+    }
+
+    fn intersect_facing(&self, origin: Vec3, dir: Vec3, tmax: f32, facing: Facing) -> Option<Hit> {
         let mut ray = Ray::new(origin.into(), dir.into(), 0.0, tmax);
         let mut best = None;
         for part in [&self.still, &self.moving] {
             let Some(bvh) = &part.bvh else { continue };
             let mut hit = RayHit::none();
-            if bvh.ray_traverse(ray, &mut hit, |r, id| self.hit_distance(part, r, id)) {
+            if bvh.ray_traverse(ray, &mut hit, |r, id| {
+                self.hit_distance(part, r, id, facing)
+            }) {
                 ray.tmax = hit.t;
                 best = Some((
                     hit.t,
@@ -214,7 +282,8 @@ impl Tracer {
     }
 
     /// Whether anything lies on the segment from `a` to `b` (end points excluded by offsets
-    /// along the normals `na`, `nb` toward each other).
+    /// along the normals `na`, `nb` toward each other), as a receiver at `a` sees it: the
+    /// backs of single-sided triangles let it through.
     pub fn occluded(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
         let d = b - a;
         let a = a + na * self.eps * na.dot(d).signum();
@@ -227,7 +296,7 @@ impl Tracer {
         let ray = Ray::new(a.into(), (d / len).into(), 0.0, len * (1.0 - 1e-4));
         [&self.still, &self.moving].into_iter().any(|part| {
             part.bvh.as_ref().is_some_and(|bvh| {
-                !bvh.ray_traverse_miss(ray, |r, id| self.hit_distance(part, r, id))
+                !bvh.ray_traverse_miss(ray, |r, id| self.hit_distance(part, r, id, Facing::Seen))
             })
         })
     }

@@ -10,3 +10,4 @@ mod samplers;
 mod scene_files;
 mod scene_fuzz;
 mod scenes;
+mod single_sided;

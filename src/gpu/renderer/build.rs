@@ -198,7 +198,14 @@ impl Passes {
         let shadows = ShadowMaps::new(
             gpu,
             (c.shadow_size, c.light_samples),
-            (points_frame.tris.len() as u32, points_frame.has_cutouts()),
+            // Cut-outs and open single-sided triangles need each fragment's triangle.
+            (
+                points_frame.tris.len() as u32,
+                points_frame.has_cutouts()
+                    || points_frame
+                        .sides()
+                        .is_some_and(|s| s.contains(&crate::scene::Sides::OPEN)),
+            ),
             &texture_data,
             &b.tris,
         );
