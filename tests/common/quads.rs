@@ -13,6 +13,7 @@ pub struct Quads {
     meshes: Vec<Value>,
     nodes: Vec<Value>,
     materials: Vec<Value>,
+    cameras: Vec<Value>,
 }
 
 impl Quads {
@@ -72,10 +73,35 @@ impl Quads {
         self.nodes.len() - 1
     }
 
+    /// A perspective camera (vertical field of view `yfov` radians) at `at` looking down -z.
+    pub fn camera(&mut self, at: [f32; 3], yfov: f32) -> usize {
+        self.cameras.push(
+            json!({ "type": "perspective", "perspective": { "yfov": yfov, "znear": 0.001 } }),
+        );
+        self.nodes
+            .push(json!({ "camera": self.cameras.len() - 1, "translation": at }));
+        self.nodes.len() - 1
+    }
+
     /// The glTF document: every node a root.
     pub fn finish(self) -> Value {
         let roots: Vec<usize> = (0..self.nodes.len()).collect();
-        json!({
+        self.document(roots)
+    }
+
+    /// The glTF document with every node a child of one root node with the properties
+    /// `parent` (a JSON object: "scale", "translation", ...).
+    pub fn finish_under(mut self, parent: Value) -> Value {
+        let children: Vec<usize> = (0..self.nodes.len()).collect();
+        let mut p = parent;
+        p["children"] = json!(children);
+        self.nodes.push(p);
+        let root = self.nodes.len() - 1;
+        self.document(vec![root])
+    }
+
+    fn document(self, roots: Vec<usize>) -> Value {
+        let mut d = json!({
             "asset": { "version": "2.0" },
             "scene": 0,
             "scenes": [{ "nodes": roots }],
@@ -90,7 +116,11 @@ impl Quads {
                 "uri": format!("data:application/octet-stream;base64,{}",
                     base64::engine::general_purpose::STANDARD.encode(&self.bin)),
             }],
-        })
+        });
+        if !self.cameras.is_empty() {
+            d["cameras"] = json!(self.cameras);
+        }
+        d
     }
 }
 
@@ -154,4 +184,53 @@ pub fn quad_under_light(panel: Panel) -> Scene {
     )
     .unwrap();
     s
+}
+
+/// A small Cornell-like box ([-1,1]^3 open at +z; white, red and green double-sided walls, a
+/// 0.6 x 0.6 light facing down 0.02 under the ceiling, a 0.6 cube on the floor) scaled by
+/// `scale` and moved by `offset` (one root node), seen from (0, 0, 3.5) scaled and moved
+/// alike (a camera node under the root), 0.75 rad. Returns the document.
+pub fn cornell_like(scale: f32, offset: [f32; 3]) -> Value {
+    let mut q = Quads::default();
+    let white = q.material(0.7, 0.0, true);
+    let red = q.material(0.6, 0.0, true);
+    let green = q.material(0.3, 0.0, true);
+    let light = q.material(0.0, 12.0, false);
+    let (x, y, z) = ([1., 0., 0.], [0., 1., 0.], [0., 0., 1.]);
+    let n = |v: [f32; 3]| v.map(|a| -a);
+    let walls = [
+        ([0., -1., 0.], z, x, white),
+        ([0., 1., 0.], x, z, white),
+        ([0., 0., -1.], x, y, white),
+        ([-1., 0., 0.], y, z, red),
+        ([1., 0., 0.], z, y, green),
+    ];
+    for (c, u, v, m) in walls {
+        q.quad(c, u, v, m, json!({}));
+    }
+    q.quad(
+        [0., 0.98, 0.],
+        [0.3, 0., 0.],
+        [0., 0., 0.3],
+        light,
+        json!({}),
+    );
+    // The cube: centre (0.3, -0.7, 0.2), half-size 0.3, faces out.
+    let h = 0.3;
+    let c = [0.3, -0.7, 0.2];
+    let at = |d: [f32; 3]| [0, 1, 2].map(|i| c[i] + h * d[i]);
+    let s = |v: [f32; 3]| v.map(|a| a * h);
+    for (d, u, v) in [
+        (y, z, x),
+        (n(y), x, z),
+        (x, y, z),
+        (n(x), z, y),
+        (z, x, y),
+        (n(z), y, x),
+    ] {
+        q.quad(at(d), s(u), s(v), white, json!({}));
+    }
+    q.camera([0., 0., 3.5], 0.75);
+    let scale = [scale; 3];
+    q.finish_under(json!({ "scale": scale, "translation": offset }))
 }

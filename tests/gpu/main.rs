@@ -12,6 +12,7 @@ mod gpu_aa;
 mod gpu_passes;
 mod punctual;
 mod radiosity;
+mod scale;
 mod single_sided;
 mod temporal;
 mod textures;
