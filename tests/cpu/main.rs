@@ -7,6 +7,7 @@ mod common;
 
 mod helpers;
 mod samplers;
+mod scale;
 mod scene_files;
 mod scene_fuzz;
 mod scenes;
