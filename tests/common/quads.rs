@@ -27,6 +27,17 @@ impl Quads {
         self.accessors.len() - 1
     }
 
+    /// An accessor of floats (`ty`: "VEC3", "VEC4", ...).
+    pub fn floats(&mut self, data: &[f32], ty: &str) -> usize {
+        let per = match ty {
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" => 4,
+            _ => 1,
+        };
+        self.accessor(bytemuck::cast_slice(data), data.len() / per, ty, 5126)
+    }
+
     /// A grey (`albedo`) material emitting `emission` (white), single- or double-sided.
     pub fn material(&mut self, albedo: f32, emission: f32, double_sided: bool) -> usize {
         let mut m = json!({

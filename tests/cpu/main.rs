@@ -6,6 +6,7 @@
 mod common;
 
 mod helpers;
+mod lights_expected;
 mod samplers;
 mod scale;
 mod scene_files;

@@ -1,10 +1,12 @@
 //! glTF 2.0 loading (.gltf with external or embedded buffers, and .glb), one module per part
 //! of glTF it reads: `buffers` (buffers, views, accessors), `material`, `mesh` (primitives),
-//! `nodes` (the node tree and cameras), `lights` (KHR_lights_punctual) and `animation`.
+//! `nodes` (the node tree, cameras and EXT_mesh_gpu_instancing), `lights`
+//! (KHR_lights_punctual) and `animation`.
 //!
 //! What irad uses: triangle meshes, node transforms, baseColorFactor x baseColorTexture x
 //! COLOR_0 (albedo), emissiveFactor x KHR_materials_emissive_strength x emissiveTexture
-//! (emitted radiance), alpha MASK, KHR_texture_transform, KHR_lights_punctual lights, the
+//! (emitted radiance), alpha MASK, KHR_texture_transform, KHR_lights_punctual lights,
+//! EXT_mesh_gpu_instancing, the
 //! first perspective camera, and node animations. Everything else is ignored with one
 //! warning per kind.
 
@@ -39,6 +41,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
     "KHR_texture_transform",
+    "EXT_mesh_gpu_instancing",
 ];
 
 pub use crate::scene::MAX_COORD;
@@ -110,6 +113,7 @@ pub fn load_slice(
     let meshes = mesh::read(&mut cx, doc, &buffers, materials.len() - 1)?;
     let lights = lights::read(&mut cx, doc)?;
     let mut graph = nodes::read(&mut cx, doc, lights.len())?;
+    nodes::instancing(&cx, doc, &buffers, &mut graph)?;
     let channels = animation::read(&mut cx, doc, &buffers, &mut graph.nodes)?;
     let closed = meshes
         .iter()

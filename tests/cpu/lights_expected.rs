@@ -1,0 +1,66 @@
+//! Issue 23 item 4, the small parts: EXT_mesh_gpu_instancing draws every instance, an emitter
+//! without power gets a warning naming it, and the automatic camera never starts inside
+//! closed geometry.
+
+use crate::common::quads::{load, Quads};
+use glam::{Quat, Vec3};
+use serde_json::json;
+
+/// Three instances of a 1 x 1 quad (facing +y) under a node moved by (0, 0, -5): the first
+/// moved by +x 2, the second turned a quarter about z (facing -x) and the third scaled by 3.
+#[test]
+fn ext_mesh_gpu_instancing_draws_every_instance() {
+    let mut q = Quads::default();
+    let grey = q.material(0.5, 0.0, true);
+    let light = q.material(0.0, 5.0, false);
+    let t = q.floats(&[2., 0., 0., 0., 0., 0., 0., 0., 0.], "VEC3");
+    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2).to_array();
+    let r = q.floats(
+        &[[0., 0., 0., 1.], quarter, [0., 0., 0., 1.]].concat(),
+        "VEC4",
+    );
+    let s = q.floats(&[1., 1., 1., 1., 1., 1., 3., 3., 3.], "VEC3");
+    q.quad(
+        [0.; 3],
+        [0., 0., 0.5],
+        [0.5, 0., 0.],
+        grey,
+        json!({ "translation": [0., 0., -5.], "extensions": { "EXT_mesh_gpu_instancing": {
+            "attributes": { "TRANSLATION": t, "ROTATION": r, "SCALE": s } } } }),
+    );
+    q.quad([0., 4., 0.], [0.5, 0., 0.], [0., 0., 0.5], light, json!({}));
+    let scene = load(&q.finish());
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .all(|w| !w.contains("EXT_mesh_gpu_instancing")),
+        "{:?}",
+        scene.warnings
+    );
+    let f = scene.at(0.0);
+    let grey_tris: Vec<usize> = (0..f.tris.len())
+        .filter(|&i| f.tri_material[i] == grey as u32)
+        .collect();
+    assert_eq!(grey_tris.len(), 6, "three instances of two triangles");
+    let centre = |k: usize| {
+        let (a, b) = (grey_tris[2 * k], grey_tris[2 * k + 1]);
+        let sum: Vec3 = f.tris[a].iter().chain(&f.tris[b]).copied().sum();
+        (sum / 6.0, f.normals[a], f.areas[a] + f.areas[b])
+    };
+    let expected = [
+        (Vec3::new(2., 0., -5.), Vec3::Y, 1.0f32),
+        (Vec3::new(0., 0., -5.), Vec3::NEG_X, 1.0),
+        (Vec3::new(0., 0., -5.), Vec3::Y, 9.0),
+    ];
+    for (k, (c, n, area)) in expected.into_iter().enumerate() {
+        let (fc, fnorm, fa) = centre(k);
+        // The quad's two triangles' corners average off the centre by a sixth of a diagonal.
+        assert!(
+            (fc - c).length() < 0.5 * area.sqrt()
+                && (fnorm - n).length() < 1e-5
+                && (fa - area).abs() < 1e-4,
+            "instance {k}: centre {fc}, normal {fnorm}, area {fa}; expected {c}, {n}, {area}"
+        );
+    }
+}
