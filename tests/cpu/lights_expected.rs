@@ -64,3 +64,63 @@ fn ext_mesh_gpu_instancing_draws_every_instance() {
         );
     }
 }
+
+/// A floor, a quad light, and the emitter without power `dark` adds: the loader's warnings.
+fn warnings_with(dark: impl FnOnce(&mut Quads) -> serde_json::Value) -> Vec<String> {
+    let mut q = Quads::default();
+    let grey = q.material(0.5, 0.0, true);
+    let light = q.material(0.0, 5.0, false);
+    q.quad([0.; 3], [0., 0., 2.], [2., 0., 0.], grey, json!({}));
+    q.quad([0., 2., 0.], [0.5, 0., 0.], [0., 0., 0.5], light, json!({}));
+    let mut doc = dark(&mut q);
+    if doc.is_null() {
+        doc = q.finish();
+    }
+    load(&doc).warnings
+}
+
+#[test]
+fn an_emitter_without_power_is_named_in_a_warning() {
+    // A material with emissiveFactor 1 and emissive strength 0 (as WaterBottle's, 0 W).
+    let w = warnings_with(|q| {
+        let m = q.material(0.5, 1.0, false);
+        let mut doc = {
+            q.quad([0., 1., 0.], [0.2, 0., 0.], [0., 0., 0.2], m, json!({}));
+            std::mem::take(q).finish()
+        };
+        doc["materials"][m]["name"] = json!("bottle");
+        doc["materials"][m]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] =
+            json!(0.0);
+        doc
+    });
+    let hits: Vec<&String> = w.iter().filter(|w| w.contains("emits nothing")).collect();
+    assert!(
+        hits.len() == 1 && hits[0].contains("material 2 ('bottle')"),
+        "{w:?}"
+    );
+    // A point light of intensity 0.
+    let w = warnings_with(|q| {
+        let mut doc = std::mem::take(q).finish();
+        doc["extensionsUsed"] = json!(["KHR_materials_emissive_strength", "KHR_lights_punctual"]);
+        doc["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "point", "name": "bulb", "intensity": 0.0 }] } });
+        let n = doc["nodes"].as_array().unwrap().len();
+        doc["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "translation": [0., 1., 0.], "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+        doc["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n));
+        doc
+    });
+    let hits: Vec<&String> = w.iter().filter(|w| w.contains("emits nothing")).collect();
+    assert!(
+        hits.len() == 1 && hits[0].contains("light 0 ('bulb')"),
+        "{w:?}"
+    );
+    // Nothing to say about a scene whose emitters all shine.
+    let w = warnings_with(|_| serde_json::Value::Null);
+    assert!(w.iter().all(|w| !w.contains("emits nothing")), "{w:?}");
+}

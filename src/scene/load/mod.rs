@@ -256,6 +256,7 @@ fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
         scene.default_camera = crate::scene::framing::lit_camera(&frame);
         cx.warn("no perspective camera: using one that frames what the lights light");
     }
+    dark_textures(&mut cx, &frame);
     check_times(&cx, &scene)?;
     let file = cx.file;
     scene.warnings = cx
@@ -383,6 +384,31 @@ fn check_precision(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
     Ok(())
 }
 
+/// A material whose emission factor is above zero but whose emissive texture is black
+/// wherever its triangles are (its power at t = 0 is zero): a warning naming it.
+fn dark_textures(cx: &mut Ctx, frame: &crate::scene::Frame) {
+    let mut power = vec![0.0f32; frame.materials.len()];
+    let mut used = vec![false; frame.materials.len()];
+    for (t, &m) in frame.tri_material.iter().enumerate() {
+        used[m as usize] |= frame.areas[t] > 0.0;
+    }
+    for (&t, &p) in frame.emitters.tris.iter().zip(&frame.emitters.power) {
+        power[frame.tri_material[t as usize] as usize] += p.max_element();
+    }
+    for (i, m) in frame.materials.iter().enumerate() {
+        if m.emissive_texture.is_some()
+            && m.emission.max_element() > 0.0
+            && used[i]
+            && power[i] <= 0.0
+        {
+            cx.warn(format!(
+                "material {i} ('{}') emits nothing: its emissiveTexture is black wherever it is used (emissiveFactor x strength {}): it lights nothing",
+                m.name, m.emission
+            ));
+        }
+    }
+}
+
 /// At times spread over the animation: coordinates within [`MAX_COORD`], a usable camera,
 /// finite emitted power; and at one of them at least, an emitter.
 fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
@@ -441,8 +467,20 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
                 " (its {n} KHR_lights_punctual lights are on no node under the scene's roots, or have no intensity)"
             ),
         };
+        // The emitters without power, named.
+        let dark: Vec<&str> = cx
+            .warnings
+            .iter()
+            .filter(|w| w.contains("emits nothing"))
+            .map(String::as_str)
+            .collect();
+        let dark = if dark.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", dark.join("; "))
+        };
         return Err(cx.err(format!(
-            "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}"
+            "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}{dark}"
         )));
     }
     Ok(())
