@@ -94,6 +94,34 @@ impl Quads {
         self.nodes.len() - 1
     }
 
+    /// A closed box from `lo` to `hi` (one mesh, 8 shared corners), faces out; returns its
+    /// node.
+    pub fn cube(&mut self, lo: [f32; 3], hi: [f32; 3], material: usize) -> usize {
+        let p: Vec<[f32; 3]> = (0..8)
+            .map(|k| [0, 1, 2].map(|a| if k >> a & 1 == 1 { hi[a] } else { lo[a] }))
+            .collect();
+        let acc = self.accessor(bytemuck::cast_slice(p.as_flattened()), 8, "VEC3", 5126);
+        self.accessors[acc]["min"] = json!(lo);
+        self.accessors[acc]["max"] = json!(hi);
+        let mut idx: Vec<u32> = Vec::new();
+        // Each face by its corners, counter-clockwise seen from outside.
+        for f in [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ] {
+            idx.extend([f[0], f[1], f[2], f[0], f[2], f[3]]);
+        }
+        let ind = self.accessor(bytemuck::cast_slice(&idx), 36, "SCALAR", 5125);
+        self.meshes.push(json!({ "primitives": [
+            { "attributes": { "POSITION": acc }, "indices": ind, "material": material }] }));
+        self.nodes.push(json!({ "mesh": self.meshes.len() - 1 }));
+        self.nodes.len() - 1
+    }
+
     /// The glTF document: every node a root.
     pub fn finish(self) -> Value {
         let roots: Vec<usize> = (0..self.nodes.len()).collect();

@@ -124,3 +124,32 @@ fn an_emitter_without_power_is_named_in_a_warning() {
     let w = warnings_with(|_| serde_json::Value::Null);
     assert!(w.iter().all(|w| !w.contains("emits nothing")), "{w:?}");
 }
+
+/// A lamp inside a closed single-sided box (as a light inside a helmet's shell): what it
+/// lights is the box's inside, which the eyes inside the box would see best. The automatic
+/// camera stays outside.
+#[test]
+fn the_automatic_camera_never_starts_inside_closed_geometry() {
+    let mut q = Quads::default();
+    let shell = q.material(0.8, 0.0, false);
+    let grey = q.material(0.5, 0.0, true);
+    let light = q.material(0.0, 5.0, false);
+    q.cube([-1.; 3], [1.; 3], shell);
+    q.quad([0., -1.5, 0.], [0., 0., 4.], [4., 0., 0.], grey, json!({}));
+    q.quad(
+        [0., 0.5, 0.],
+        [0.2, 0., 0.],
+        [0., 0., 0.2],
+        light,
+        json!({}),
+    );
+    let scene = load(&q.finish());
+    let f = scene.at(0.0);
+    assert!(f.instances.iter().any(|i| i.closed), "the box is a solid");
+    let eye = f.camera.position;
+    println!("automatic camera at {eye}");
+    assert!(
+        eye.abs().max_element() > 1.0,
+        "the camera is inside the box at {eye}"
+    );
+}
