@@ -153,3 +153,30 @@ fn the_automatic_camera_never_starts_inside_closed_geometry() {
         "the camera is inside the box at {eye}"
     );
 }
+
+/// An emissive texture black wherever its material is used (emissiveFactor 1): the material
+/// is named in a warning.
+#[test]
+fn an_emissive_texture_black_everywhere_is_named_in_a_warning() {
+    use base64::Engine;
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([0, 0, 0, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let w = warnings_with(|q| {
+        let m = q.material(0.5, 1.0, false);
+        q.quad([0., 1., 0.], [0.2, 0., 0.], [0., 0., 0.2], m, json!({}));
+        let mut doc = std::mem::take(q).finish();
+        doc["materials"][m]["name"] = json!("label");
+        doc["materials"][m]["emissiveTexture"] = json!({ "index": 0 });
+        doc["textures"] = json!([{ "source": 0 }]);
+        doc["images"] = json!([{ "uri": format!("data:image/png;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&png)) }]);
+        doc
+    });
+    let hits: Vec<&String> = w.iter().filter(|w| w.contains("emits nothing")).collect();
+    assert!(
+        hits.len() == 1 && hits[0].contains("material 2 ('label')") && hits[0].contains("black"),
+        "{w:?}"
+    );
+}
