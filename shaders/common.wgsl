@@ -2,7 +2,9 @@
 
 const PI: f32 = 3.14159265358979;
 
-// One scene triangle: vertices, unit geometric normal, albedo and emitted radiance.
+// One scene triangle: vertices, unit geometric normal (in w its sides: 0 double-sided, 1
+// single-sided on a closed mesh, 2 single-sided elsewhere; see `Frame::sides`), albedo and
+// emitted radiance.
 struct Tri {
     v0: vec4f,
     v1: vec4f,

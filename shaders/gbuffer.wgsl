@@ -3,6 +3,7 @@
 
 struct Camera {
     view_proj: mat4x4f,
+    eye: vec4f,
 }
 @group(0) @binding(0) var<uniform> cam: Camera;
 @group(0) @binding(1) var<storage, read> cut: Cutouts;
@@ -31,6 +32,11 @@ fn vs(@location(0) pos: vec3f, @location(1) tri: u32) -> VsOut {
 @fragment
 fn fs(i: VsOut) -> @location(0) vec4u {
     if cut.on != 0u && cut_away(i.tri, i.world) {
+        discard;
+    }
+    // A single-sided triangle seen from behind is not there (docs/math.md).
+    let n = tris[i.tri].n;
+    if n.w > 0.5 && dot(n.xyz, i.world - cam.eye.xyz) > 0.0 {
         discard;
     }
     return vec4u(bitcast<vec3u>(i.world), i.tri + 1u);

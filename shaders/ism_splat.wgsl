@@ -70,6 +70,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     if dot(dir, v.normal.xyz) <= 0.0 {
         return;
     }
+    // An open single-sided triangle facing the VPL shadows nothing (see shadow.wgsl).
+    if tri.n.w > 1.5 && dot(tri.n.xyz, d) < 0.0 {
+        return;
+    }
     let texel = paraboloid_texel(dir, v.normal.xyz, P.ism_size);
     let depth = 16777216u - u32(clamp(dist / P.far, 0.0, 1.0) * 16777215.0);
     if j < P.ism_points {

@@ -71,5 +71,11 @@ fn fs(i: VsOut) -> @location(0) vec4u {
     if cut.on != 0u && cut_away(i.tri, i.q + F.pos.xyz) {
         discard;
     }
+    // An open single-sided triangle facing the light shadows nothing: the receivers behind it
+    // see its back, through which they see the light (docs/math.md, "Single-sided surfaces").
+    let n = tris[i.tri].n;
+    if n.w > 1.5 && dot(n.xyz, select(i.q, F.fwd.xyz, F.ortho > 0.0)) < 0.0 {
+        discard;
+    }
     return distance_bits(i);
 }

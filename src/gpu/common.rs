@@ -47,7 +47,10 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// One scene triangle: vertices, unit geometric normal, albedo and emitted radiance.
+    /// One scene triangle: vertices, unit geometric normal (`n[3]`: its [`Frame::sides`]
+    /// class), albedo and emitted radiance.
+    ///
+    /// [`Frame::sides`]: crate::scene::Frame::sides
     pub(crate) struct Tri {
         pub v0: [f32; 4],
         pub v1: [f32; 4],

@@ -13,9 +13,11 @@ use glam::{Mat4, Vec2, Vec3};
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
 gpu_struct! {
-    /// The camera's view-projection matrix (column-major).
+    /// The camera's view-projection matrix (column-major) and its position (single-sided
+    /// triangles seen from behind are left out).
     pub(crate) struct Camera {
         pub view_proj: [[f32; 4]; 4],
+        pub eye: [f32; 4],
     }
 }
 
@@ -299,7 +301,7 @@ impl GBuffer {
         enc: &mut wgpu::CommandEncoder,
         vertices: &wgpu::Buffer,
         runs: &[(std::ops::Range<u32>, Draw)],
-        (view_proj, skip): (Mat4, wgpu::Face),
+        (view_proj, skip, eye): (Mat4, wgpu::Face, Vec3),
     ) {
         let (s, w, h) = (self.aa, self.width, self.height);
         let mut bytes = vec![0u8; self.stride as usize * (s * s) as usize];
@@ -309,6 +311,7 @@ impl GBuffer {
                 let k = (j * s + i) as usize;
                 let cam = Camera {
                     view_proj: jittered(view_proj, subsample(i, j, s), w, h).to_cols_array_2d(),
+                    eye: eye.extend(1.0).to_array(),
                 };
                 let o = k * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Camera>()]

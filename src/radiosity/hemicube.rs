@@ -244,7 +244,7 @@ mod tests {
     fn cornell_rows_against_ray_cast_rows() {
         let Some(gpu) = gpu() else { return };
         let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
-        let tr = Tracer::new(&f);
+        let tr = Tracer::two_sided(&f);
         let m = Mesh::uniform(&f, 0.15, 6000);
         let n = m.len();
         let q = FormFactorAccuracy { points: 1, rays: 7 };

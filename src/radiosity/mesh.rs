@@ -366,7 +366,17 @@ impl Mesh {
             // Drawn whole (the elements' raster passes leave nothing out).
             instances: Vec::new(),
             tris,
-            materials: frame.materials.clone(),
+            // Double-sided: classical radiosity treats every surface as double-sided.
+            materials: std::sync::Arc::new(
+                frame
+                    .materials
+                    .iter()
+                    .map(|m| crate::scene::Material {
+                        double_sided: true,
+                        ..m.clone()
+                    })
+                    .collect(),
+            ),
             // Elements take their materials' factors (textures are not resolved per element).
             textures: frame.textures.clone(),
             attrs: None,

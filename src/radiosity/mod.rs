@@ -268,6 +268,15 @@ impl RadiositySettings {
 /// (split where neighbours differ, solve again).
 pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution {
     let start = std::time::Instant::now();
+    // Classical radiosity treats every surface as double-sided (docs/math.md, "Single-sided
+    // surfaces"), its rays too.
+    let two_sided;
+    let tracer = if tracer.has_single_sided() {
+        two_sided = Tracer::two_sided(frame);
+        &two_sided
+    } else {
+        tracer
+    };
     let mut mesh = Mesh::uniform(frame, s.element_size, s.max_elements);
     let mut rounds = 0;
     let mut stats_rays = 0;

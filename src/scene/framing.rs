@@ -1,6 +1,8 @@
 //! A camera for a file that has none: one that sees what the lights light. Points spread
 //! over the surfaces by area are lit by a few emitter samples (with shadow rays); eyes around
 //! the lit region, outside it and inside it, are scored by the light of the points they see.
+//! An eye inside a closed mesh (most rays from it first meet the inside of a solid) is never
+//! chosen.
 
 use super::{Camera, Frame};
 use crate::trace::Tracer;
@@ -39,10 +41,15 @@ pub fn lit_camera(frame: &Frame) -> Camera {
     let center = (blo + bhi) * 0.5;
     let radius = ((bhi - blo).length() * 0.5).max(1e-3);
     let dist = 1.1 * radius / (YFOV * 0.5).sin();
+    let solid = solid_triangles(frame);
     let mut best = (0.0, fallback);
     for f in [1.0, 0.6, 0.3] {
         for dir in directions() {
-            let cam = look_from(center + dir * dist * f, center);
+            let eye = center + dir * dist * f;
+            if inside_solid(frame, &tracer, &solid, eye) {
+                continue;
+            }
+            let cam = look_from(eye, center);
             let s = score(&cam, &lit, &tracer);
             if s > best.0 {
                 best = (s, cam);
@@ -50,6 +57,39 @@ pub fn lit_camera(frame: &Frame) -> Camera {
         }
     }
     best.1
+}
+
+/// For each triangle, whether it belongs to a closed mesh.
+fn solid_triangles(frame: &Frame) -> Vec<bool> {
+    let mut s = vec![false; frame.tris.len()];
+    for i in frame.instances.iter().filter(|i| i.closed) {
+        for t in i.tris.clone() {
+            if let Some(x) = s.get_mut(t as usize) {
+                *x = true;
+            }
+        }
+    }
+    s
+}
+
+/// Whether `eye` lies inside a closed mesh: more than half of the 26 rays from it first meet
+/// a closed mesh's triangle from behind (from inside a solid every ray does).
+fn inside_solid(frame: &Frame, tracer: &Tracer, solid: &[bool], eye: Vec3) -> bool {
+    if !solid.contains(&true) {
+        return false;
+    }
+    let dirs = directions();
+    let inside = dirs
+        .iter()
+        .filter(|&&d| {
+            tracer
+                .intersect_light(eye, d, f32::INFINITY)
+                .is_some_and(|h| {
+                    solid[h.tri as usize] && frame.normals[h.tri as usize].dot(d) > 0.0
+                })
+        })
+        .count();
+    2 * inside > dirs.len()
 }
 
 /// The 26 directions to the corners, edges and faces of a cube, +Z first.
@@ -124,7 +164,9 @@ fn score(cam: &Camera, lit: &[Lit], tracer: &Tracer) -> f32 {
             let to = -v.normalize();
             l.n.dot(v) > 0.0
                 && cam.forward.dot(to).clamp(-1.0, 1.0).acos() < half
-                && !tracer.occluded(l.x, l.n, cam.position, to)
+                // Traced from the eye, the receiver (single-sided surfaces are seen from the
+                // front only: docs/math.md).
+                && !tracer.occluded(cam.position, Vec3::ZERO, l.x, l.n)
         })
         .map(|l| l.e)
         .sum()

@@ -238,6 +238,19 @@ impl Emitters {
     }
 }
 
+/// The classes of [`Frame::sides`].
+pub struct Sides;
+
+impl Sides {
+    /// Double-sided: seen, lit and casting shadows from both sides.
+    pub const DOUBLE: u8 = 0;
+    /// Single-sided on a closed mesh: invisible from behind; as an occluder seen from a light
+    /// outside the solid, the same as double-sided.
+    pub const SOLID: u8 = 1;
+    /// Single-sided on an open mesh: invisible from behind, to shadow rays too.
+    pub const OPEN: u8 = 2;
+}
+
 /// The scene evaluated at one time: everything the frame's stages need.
 #[derive(Clone, Debug)]
 pub struct Frame {
@@ -363,6 +376,34 @@ impl Frame {
             }
         }
         sum / (N * N) as f32
+    }
+
+    /// How each triangle is seen from behind, or None when every triangle is double-sided
+    /// (see docs/math.md, "Single-sided surfaces"): [`Sides::DOUBLE`] for a double-sided
+    /// material, [`Sides::SOLID`] for a single-sided one on a closed mesh, [`Sides::OPEN`]
+    /// for a single-sided one elsewhere.
+    pub fn sides(&self) -> Option<Vec<u8>> {
+        let single = |t: usize| !self.materials[self.tri_material[t] as usize].double_sided;
+        if !(0..self.tris.len()).any(single) {
+            return None;
+        }
+        let mut s: Vec<u8> = (0..self.tris.len())
+            .map(|t| {
+                if single(t) {
+                    Sides::OPEN
+                } else {
+                    Sides::DOUBLE
+                }
+            })
+            .collect();
+        for i in self.instances.iter().filter(|i| i.closed) {
+            for t in i.tris.clone() {
+                if s[t as usize] == Sides::OPEN {
+                    s[t as usize] = Sides::SOLID;
+                }
+            }
+        }
+        Some(s)
     }
 
     /// Whether any triangle can be cut away (ray casting then tests every hit).

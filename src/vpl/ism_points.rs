@@ -147,7 +147,8 @@ pub fn near_points(
             let (t, b) = v.normal.any_orthonormal_pair();
             dirs.iter().map(move |d| {
                 let w = t * d.x + b * d.y + v.normal * d.z;
-                match tracer.intersect(tracer.offset(v.position, v.normal, w), w, f32::INFINITY) {
+                let o = tracer.offset(v.position, v.normal, w);
+                match tracer.intersect_occluder(o, w, f32::INFINITY) {
                     Some(h) => Point {
                         tri: h.tri,
                         b1: h.b1,

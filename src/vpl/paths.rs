@@ -71,12 +71,17 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         return out;
     }
     for depth in 1..=MAX_DEPTH {
-        let Some(h) = tracer.intersect(origin, dir, f32::INFINITY) else {
+        let Some(h) = tracer.intersect_light(origin, dir, f32::INFINITY) else {
             break;
         };
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
+        // The back of a single-sided surface: those beyond it see its front, not this light,
+        // and nobody sees its back (docs/math.md, "Single-sided surfaces").
+        if ng.dot(dir) > 0.0 && tracer.single_sided(h.tri) {
+            break;
+        }
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo_at(tri, h.b1, h.b2);
         out.push(Vpl {

@@ -5,6 +5,8 @@
 
 #![allow(dead_code)]
 
+pub mod quads;
+
 use irad::gpu::{adapters, BackendChoice};
 use irad::image::Hdr;
 use irad::math::luminance;

@@ -7,7 +7,10 @@ mod common;
 
 mod helpers;
 mod hostile;
+mod lights_expected;
 mod samplers;
+mod scale;
 mod scene_files;
 mod scene_fuzz;
 mod scenes;
+mod single_sided;

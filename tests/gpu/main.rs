@@ -12,6 +12,8 @@ mod gpu_aa;
 mod gpu_passes;
 mod punctual;
 mod radiosity;
+mod scale;
+mod single_sided;
 mod temporal;
 mod textures;
 mod thin_gap;

@@ -103,7 +103,8 @@ impl Gltf {
 const ALBEDO: f32 = 0.5;
 
 /// A document with `meshes` (one node each), the lights on the nodes `light_nodes`, and no
-/// emissive material: material 0 grey (albedo 0.5), 1 black.
+/// emissive material: material 0 grey (albedo 0.5), 1 black, both double-sided (the mirrored
+/// spot lights the floor's underside, which a single-sided floor would not have).
 fn doc(meshes: Vec<Value>, lights: Value, light_nodes: Vec<Value>) -> Value {
     let mut nodes: Vec<Value> = (0..meshes.len()).map(|m| json!({ "mesh": m })).collect();
     nodes.extend(light_nodes);
@@ -114,8 +115,8 @@ fn doc(meshes: Vec<Value>, lights: Value, light_nodes: Vec<Value>) -> Value {
         "nodes": nodes,
         "meshes": meshes,
         "materials": [
-            { "pbrMetallicRoughness": { "baseColorFactor": [ALBEDO, ALBEDO, ALBEDO, 1.0], "metallicFactor": 0.0 } },
-            { "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 } },
+            { "pbrMetallicRoughness": { "baseColorFactor": [ALBEDO, ALBEDO, ALBEDO, 1.0], "metallicFactor": 0.0 }, "doubleSided": true },
+            { "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 }, "doubleSided": true },
         ],
         "extensionsUsed": ["KHR_lights_punctual"],
         "extensions": { "KHR_lights_punctual": { "lights": lights } },

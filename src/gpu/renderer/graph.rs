@@ -121,10 +121,14 @@ graph! {
     },
     build shadows: ShadowMaps = |b| {
         let (c, f) = (b.c, b.frame);
+        // Cut-outs and open single-sided triangles need each fragment's triangle.
+        let per_triangle = f.has_cutouts()
+            || f.sides()
+                .is_some_and(|s| s.contains(&crate::scene::Sides::OPEN));
         let s = ShadowMaps::new(
             b.gpu,
             (c.shadow_size, c.light_samples),
-            (f.tris.len() as u32, f.has_cutouts()),
+            (f.tris.len() as u32, per_triangle),
             &b.textures,
             &b.shared.tris,
         );

@@ -322,12 +322,14 @@ impl Renderer {
     /// Uploads the triangles and the vertex buffer unless they are the same bits as last
     /// frame's (and reuse is on); returns whether they are the same bits.
     fn upload_geometry(&mut self, f: &Frame) -> bool {
+        let sides = f.sides();
+        let side = |i: usize| sides.as_ref().map_or(0.0, |s| s[i] as f32);
         let tris: Vec<Tri> = (0..f.tris.len())
             .map(|i| Tri {
                 v0: f.tris[i][0].extend(1.0).to_array(),
                 v1: f.tris[i][1].extend(1.0).to_array(),
                 v2: f.tris[i][2].extend(1.0).to_array(),
-                n: f.normals[i].extend(0.0).to_array(),
+                n: f.normals[i].extend(side(i)).to_array(),
                 albedo: f.albedo(i).extend(0.0).to_array(),
                 emission: f.emission(i).extend(0.0).to_array(),
             })
@@ -528,9 +530,14 @@ impl Renderer {
         let (all, front) = crate::scene::culling::counts(&runs);
         f.drawn.triangles = tris as u64;
         (f.drawn.gbuffer_triangles, f.drawn.gbuffer_front_only) = (all, front);
-        self.passes
-            .gbuffer
-            .encode(&self.gpu, enc, &self.vertices, &runs, (f.view_proj, skip));
+        let eye = f.input.frame.camera.position;
+        self.passes.gbuffer.encode(
+            &self.gpu,
+            enc,
+            &self.vertices,
+            &runs,
+            (f.view_proj, skip, eye),
+        );
     }
 
     /// shadow_maps: the emitter samples' hemicube faces (kept while the geometry is still).

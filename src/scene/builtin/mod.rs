@@ -392,7 +392,11 @@ impl GltfBuilder {
             "name": name,
             "pbrMetallicRoughness": { "baseColorFactor": [albedo[0], albedo[1], albedo[2], 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0 },
         });
-        if strength > 0.0 {
+        if strength == 0.0 {
+            // Walls are seen, lit and cast shadows from both sides (the scenes' cameras and
+            // lights may be on either); emitters emit from their fronts only.
+            m["doubleSided"] = json!(true);
+        } else {
             m["emissiveFactor"] = json!(emission.map(|e| e / strength));
             if strength != 1.0 {
                 m["extensions"] =

@@ -54,6 +54,12 @@ fn one(cx: &mut Ctx, i: usize, l: &Light) -> Result<LightDef, LoadError> {
         )));
     }
     let intensity = color * (l.intensity / LUMENS_PER_WATT);
+    if intensity.max_element() <= 0.0 {
+        cx.warn(format!(
+            "{what} emits nothing (intensity {} x colour {color}): it lights nothing",
+            l.intensity
+        ));
+    }
     if intensity.max_element() > MAX_INTENSITY {
         return Err(cx.err(format!(
             "{what} has the intensity {} {} ({} in irad's units), above irad's limit of {MAX_INTENSITY:e} (light is summed in 32-bit floats)",

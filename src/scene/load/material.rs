@@ -96,6 +96,19 @@ fn one(
     };
     let strength = m.emissive_strength().unwrap_or(1.0);
     let emission = Vec3::from(m.emissive_factor()) * strength;
+    // Meant to emit (an emissive texture, factor or strength) but emitting nothing.
+    let factor = Vec3::from(m.emissive_factor());
+    let meant = m.emissive_texture().is_some()
+        || factor.max_element() > 0.0
+        || m.emissive_strength().is_some_and(|s| s > 0.0);
+    if meant && emission.max_element() <= 0.0 {
+        cx.warn(format!(
+            "material {} ('{}') emits nothing (emissiveFactor {factor} x emissive strength {strength}{}): it lights nothing",
+            m.index().unwrap_or(0),
+            m.name().unwrap_or(""),
+            if m.emissive_texture().is_some() { " x its emissiveTexture" } else { "" }
+        ));
+    }
     if !emission.is_finite() || emission.min_element() < 0.0 {
         return Err(cx.err(format!(
             "material {} has an invalid emission {emission}",

@@ -1,10 +1,12 @@
 //! glTF 2.0 loading (.gltf with external or embedded buffers, and .glb), one module per part
 //! of glTF it reads: `buffers` (buffers, views, accessors), `material`, `mesh` (primitives),
-//! `nodes` (the node tree and cameras), `lights` (KHR_lights_punctual) and `animation`.
+//! `nodes` (the node tree, cameras and EXT_mesh_gpu_instancing), `lights`
+//! (KHR_lights_punctual) and `animation`.
 //!
 //! What irad uses: triangle meshes, node transforms, baseColorFactor x baseColorTexture x
 //! COLOR_0 (albedo), emissiveFactor x KHR_materials_emissive_strength x emissiveTexture
-//! (emitted radiance), alpha MASK, KHR_texture_transform, KHR_lights_punctual lights, the
+//! (emitted radiance), alpha MASK, KHR_texture_transform, KHR_lights_punctual lights,
+//! EXT_mesh_gpu_instancing, the
 //! first perspective camera, and node animations. Everything else is ignored with one
 //! warning per kind.
 
@@ -41,6 +43,7 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_mesh_quantization",
     "KHR_lights_punctual",
     "KHR_texture_transform",
+    "EXT_mesh_gpu_instancing",
 ];
 
 pub use crate::scene::MAX_COORD;
@@ -133,6 +136,7 @@ pub fn load_slice_with(
     let meshes = mesh::read(&mut cx, doc, &buffers, materials.len() - 1)?;
     let lights = lights::read(&mut cx, doc)?;
     let mut graph = nodes::read(&mut cx, doc, lights.len())?;
+    nodes::instancing(&cx, doc, &buffers, &mut graph)?;
     let channels = animation::read(&mut cx, doc, &buffers, &mut graph.nodes)?;
     let closed = meshes
         .iter()
@@ -267,6 +271,7 @@ fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
         return Err(cx.err("no triangles in the scene's node tree"));
     }
     recenter(&mut cx, &mut scene, frame0.bounds());
+    check_precision(&cx, &scene)?;
     let frame = scene.at(0.0);
     let (lo, hi) = frame.bounds();
     scene.default_camera = Camera::framing(lo, hi);
@@ -274,6 +279,7 @@ fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
         scene.default_camera = crate::scene::framing::lit_camera(&frame);
         cx.warn("no perspective camera: using one that frames what the lights light");
     }
+    dark_textures(&mut cx, &frame);
     check_times(&cx, &scene)?;
     let file = cx.file;
     scene.warnings = cx
@@ -320,6 +326,109 @@ fn recenter(cx: &mut Ctx, scene: &mut Scene, (lo, hi): (Vec3, Vec3)) {
             center.length() / size,
             -center
         ));
+    }
+}
+
+/// The most a mesh's coordinates may be rounded, as a share of its median edge (32-bit floats
+/// are up to `|x| * 2^-23` apart near `x`).
+const MAX_ROUNDING: f32 = 0.01;
+
+/// The distance from `x >= 0` to the next 32-bit float.
+fn spacing(x: f32) -> f32 {
+    f32::from_bits(x.to_bits() + 1) - x
+}
+
+/// How coarsely points as far as `max_abs` from the origin are rounded, over the median length
+/// of the triangles' edges (`tris` as corner positions).
+fn rounding(points: impl Iterator<Item = [Vec3; 3]>) -> Option<(f32, f32, f32)> {
+    let mut edges = Vec::new();
+    let mut max_abs = 0.0f32;
+    for [a, b, c] in points {
+        max_abs = max_abs.max(a.abs().max(b.abs()).max(c.abs()).max_element());
+        edges.extend([(b - a).length(), (c - b).length(), (a - c).length()]);
+    }
+    if edges.is_empty() || !max_abs.is_finite() {
+        return None;
+    }
+    let mid = edges.len() / 2;
+    let median = *edges.select_nth_unstable_by(mid, f32::total_cmp).1;
+    // Most edges of no length: nothing to measure the rounding against.
+    if median <= 0.0 {
+        return None;
+    }
+    Some((spacing(max_abs) / median, max_abs, median))
+}
+
+/// Each mesh's coordinates (as the file stores them) and each placed mesh's (as irad renders
+/// them, after [`recenter`]) resolve its shape: rounded by at most [`MAX_ROUNDING`] of its
+/// median edge. Past that (a mesh whose vertices themselves lie far from its origin, a small
+/// object far from a large scene's centre) the shape is lost to 32-bit floats: an error, not a
+/// black or broken frame.
+fn check_precision(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
+    fn tris(p: &crate::scene::Primitive, m: glam::Mat4) -> impl Iterator<Item = [Vec3; 3]> + '_ {
+        p.indices.chunks_exact(3).filter_map(move |t| {
+            let v = |i: u32| p.positions.get(i as usize).map(|&x| m.transform_point3(x));
+            Some([v(t[0])?, v(t[1])?, v(t[2])?])
+        })
+    }
+    let too_coarse = |what: String, (share, max_abs, median): (f32, f32, f32)| {
+        cx.err(format!(
+            "{what} lies up to {max_abs:.3e} from the origin, where 32-bit floats are {} apart: {:.1}% of its median edge ({median:.3e}), too coarse for its shape; place it by its node's translation (in the file, the vertices near the mesh's own origin) or move the scene nearer the origin",
+            spacing(max_abs),
+            100.0 * share
+        ))
+    };
+    let mut used = vec![false; scene.meshes.len()];
+    let world = scene.world_matrices(0.0);
+    let mut stack = scene.roots.clone();
+    while let Some(n) = stack.pop() {
+        let node = &scene.nodes[n];
+        stack.extend(&node.children);
+        let Some(m) = node.mesh else { continue };
+        let prims = &scene.meshes[m];
+        if !used[m] {
+            used[m] = true;
+            let local = prims.iter().flat_map(|p| tris(p, glam::Mat4::IDENTITY));
+            if let Some(r) = rounding(local).filter(|r| r.0 > MAX_ROUNDING) {
+                return Err(too_coarse(
+                    format!("mesh {m}'s geometry, as the file stores it,"),
+                    r,
+                ));
+            }
+        }
+        let placed = prims.iter().flat_map(|p| tris(p, world[n]));
+        if let Some(r) = rounding(placed).filter(|r| r.0 > MAX_ROUNDING) {
+            return Err(too_coarse(
+                format!("node {n} ('{}'), placed in the scene,", node.name),
+                r,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A material whose emission factor is above zero but whose emissive texture is black
+/// wherever its triangles are (its power at t = 0 is zero): a warning naming it.
+fn dark_textures(cx: &mut Ctx, frame: &crate::scene::Frame) {
+    let mut power = vec![0.0f32; frame.materials.len()];
+    let mut used = vec![false; frame.materials.len()];
+    for (t, &m) in frame.tri_material.iter().enumerate() {
+        used[m as usize] |= frame.areas[t] > 0.0;
+    }
+    for (&t, &p) in frame.emitters.tris.iter().zip(&frame.emitters.power) {
+        power[frame.tri_material[t as usize] as usize] += p.max_element();
+    }
+    for (i, m) in frame.materials.iter().enumerate() {
+        if m.emissive_texture.is_some()
+            && m.emission.max_element() > 0.0
+            && used[i]
+            && power[i] <= 0.0
+        {
+            cx.warn(format!(
+                "material {i} ('{}') emits nothing: its emissiveTexture is black wherever it is used (emissiveFactor x strength {}): it lights nothing",
+                m.name, m.emission
+            ));
+        }
     }
 }
 
@@ -381,8 +490,20 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
                 " (its {n} KHR_lights_punctual lights are on no node under the scene's roots, or have no intensity)"
             ),
         };
+        // The emitters without power, named.
+        let dark: Vec<&str> = cx
+            .warnings
+            .iter()
+            .filter(|w| w.contains("emits nothing"))
+            .map(String::as_str)
+            .collect();
+        let dark = if dark.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", dark.join("; "))
+        };
         return Err(cx.err(format!(
-            "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}"
+            "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}{dark}"
         )));
     }
     Ok(())

@@ -164,3 +164,102 @@ fn check_roots(cx: &Ctx, nodes: &[Node], roots: &[usize]) -> Result<(), LoadErro
     }
     Ok(())
 }
+
+/// EXT_mesh_gpu_instancing: a node whose extension lists per-instance TRANSLATION, ROTATION
+/// and SCALE draws its mesh once per instance, each transformed by its own TRS before the
+/// node's transform. Each instance becomes a child node of its own carrying the mesh (the
+/// node itself no longer does), so every stage sees ordinary nodes.
+pub(super) fn instancing(
+    cx: &Ctx,
+    doc: &gltf::Document,
+    buffers: &super::buffers::Buffers,
+    graph: &mut Graph,
+) -> Result<(), LoadError> {
+    const EXT: &str = "EXT_mesh_gpu_instancing";
+    let json = doc.as_json();
+    for n in 0..graph.nodes.len().min(json.nodes.len()) {
+        let Some(ext) = json.nodes[n]
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get(EXT))
+        else {
+            continue;
+        };
+        let Some(mesh) = graph.nodes[n].mesh else {
+            continue;
+        };
+        let attrs = ext.get("attributes").and_then(|a| a.as_object());
+        let read = |name: &str, width: usize| -> Result<Option<Vec<f32>>, LoadError> {
+            let Some(i) = attrs.and_then(|a| a.get(name)) else {
+                return Ok(None);
+            };
+            let acc = i
+                .as_u64()
+                .and_then(|i| doc.accessors().nth(i as usize))
+                .ok_or_else(|| {
+                    cx.err(format!(
+                        "invalid glTF: node {n}'s {EXT} {name} is {i}, not an accessor"
+                    ))
+                })?;
+            let what = format!("node {n}'s {EXT} {name}");
+            if super::buffers::width(acc.dimensions()) != width {
+                return Err(cx.err(format!(
+                    "accessor {} ({what}) has {} components, not {width}",
+                    acc.index(),
+                    super::buffers::width(acc.dimensions())
+                )));
+            }
+            super::buffers::floats(cx, buffers, &acc, &what).map(Some)
+        };
+        let t = read("TRANSLATION", 3)?;
+        let r = read("ROTATION", 4)?;
+        let s = read("SCALE", 3)?;
+        let counts: Vec<usize> = [(&t, 3), (&r, 4), (&s, 3)]
+            .iter()
+            .filter_map(|(v, w)| v.as_ref().map(|v| v.len() / w))
+            .collect();
+        let Some(&count) = counts.first() else {
+            continue;
+        };
+        if counts.iter().any(|&c| c != count) {
+            return Err(cx.err(format!(
+                "invalid glTF: node {n}'s {EXT} attributes have different counts {counts:?}"
+            )));
+        }
+        let name = graph.nodes[n].name.clone();
+        for i in 0..count {
+            let v3 = |v: &Option<Vec<f32>>, d: Vec3| {
+                v.as_ref()
+                    .map_or(d, |v| Vec3::from_slice(&v[3 * i..3 * i + 3]))
+            };
+            let translation = v3(&t, Vec3::ZERO);
+            let scale = v3(&s, Vec3::ONE);
+            let rotation = r
+                .as_ref()
+                .map_or(Quat::IDENTITY, |r| Quat::from_slice(&r[4 * i..4 * i + 4]));
+            if !(translation.is_finite() && scale.is_finite() && rotation.is_finite())
+                || rotation.length_squared() < 1e-12
+            {
+                return Err(cx.err(format!(
+                    "node {n}'s {EXT} instance {i} has a non-finite transform or a zero rotation"
+                )));
+            }
+            graph.nodes.push(Node {
+                name: format!("{name} (instance {i})"),
+                local: Local::Trs {
+                    translation,
+                    rotation: rotation.normalize(),
+                    scale,
+                },
+                children: Vec::new(),
+                mesh: Some(mesh),
+                camera: None,
+                light: None,
+            });
+            let child = graph.nodes.len() - 1;
+            graph.nodes[n].children.push(child);
+        }
+        graph.nodes[n].mesh = None;
+    }
+    Ok(())
+}
