@@ -15,7 +15,7 @@ const SIZE: u32 = 64;
 /// The still Cornell box at SIZE x SIZE with 1024 VPLs (so the VPLs' own noise is small)
 /// and distance clamp `clamp`, compensated by `rays` rays a pixel (0: not).
 fn render(clamp: f32, rays: u32) -> Hdr {
-    let mut c = config::Render::default();
+    let mut c = crate::common::render_config();
     c.sequence.size = config::Size {
         width: SIZE,
         height: SIZE,

@@ -18,7 +18,7 @@ const TEST: &str = "gpu";
 /// defaults otherwise: 64^2 ISM tiles, points a VPL from the scene (464 for the Cornell box), 3
 /// pull-push levels).
 fn config(w: u32, h: u32, vpls: u32, light_samples: u32) -> config::Render {
-    let mut c = config::Render::default();
+    let mut c = crate::common::render_config();
     c.sequence.size = config::Size {
         width: w,
         height: h,

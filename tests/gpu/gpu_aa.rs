@@ -18,7 +18,7 @@ const TEST: &str = "gpu_aa";
 /// Settings for the Cornell box at `size` x `size` with `vpls` VPLs and `aa` sub-samples per
 /// pixel side (the defaults otherwise).
 fn config(size: u32, vpls: u32, aa: u32, backend: BackendChoice) -> config::Render {
-    let mut c = config::Render::default();
+    let mut c = crate::common::render_config();
     c.sequence.size = config::Size {
         width: size,
         height: size,

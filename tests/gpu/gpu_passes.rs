@@ -18,7 +18,7 @@ fn pipeline(scene: &str, vpls: u32, backend: BackendChoice) -> Pipeline {
 
 /// [`pipeline`] with the sampler `kind`.
 fn pipeline_of(scene: &str, vpls: u32, backend: BackendChoice, kind: SamplerKind) -> Pipeline {
-    let mut c = config::Render::default();
+    let mut c = crate::common::render_config();
     c.sequence.size = config::Size {
         width: 48,
         height: 40,
@@ -223,7 +223,7 @@ fn interleaved(
     n: u32,
     vpls: u32,
 ) -> irad::gpu::Renderer {
-    let mut c = config::Render::default();
+    let mut c = crate::common::render_config();
     c.sequence.size = config::Size {
         width: IW,
         height: IH,

@@ -546,7 +546,7 @@ const SIZE: u32 = 64;
 fn gpu_run(scene: &Scene) -> GpuRun {
     let backend = common::backend();
     let (w, h) = (SIZE, SIZE);
-    let mut cfg = irad::config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = irad::config::Size {
         width: w,
         height: h,

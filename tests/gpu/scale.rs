@@ -16,7 +16,7 @@ fn scene(scale: f32, offset: f32) -> Scene {
 
 fn gpu(scene: &Scene) -> Hdr {
     let backend = common::backend();
-    let mut cfg = irad::config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = irad::config::Size {
         width: SIZE,
         height: SIZE,

@@ -16,7 +16,7 @@ const SIZE: u32 = 32;
 
 fn gpu(scene: &Scene) -> Hdr {
     let backend = common::backend();
-    let mut cfg = irad::config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = irad::config::Size {
         width: SIZE,
         height: SIZE,

@@ -20,7 +20,7 @@ fn pipeline(
     (sampler, interleave): (SamplerKind, u32),
     accumulate: u32,
 ) -> Pipeline {
-    let mut cfg = config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = config::Size {
         width: size,
         height: size,

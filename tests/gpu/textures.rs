@@ -466,7 +466,7 @@ fn gpu_against_twin(
     bound: f32,
 ) -> (f32, f32, String) {
     let (w, h) = (64, 64);
-    let mut cfg = irad::config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = irad::config::Size {
         width: w,
         height: h,
@@ -649,7 +649,7 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         .set_camera(Vec3::new(0.3, 1.6, 2.4), Vec3::new(0.0, 0.4, -0.4), 0.9)
         .unwrap();
     let (w, h) = (64, 64);
-    let mut cfg = irad::config::Render::default();
+    let mut cfg = crate::common::render_config();
     cfg.sequence.size = irad::config::Size {
         width: w,
         height: h,

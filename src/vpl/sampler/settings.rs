@@ -20,7 +20,7 @@ pub struct SamplerConfig {
 impl Default for SamplerConfig {
     fn default() -> Self {
         SamplerConfig {
-            kind: SamplerKind::Uniform,
+            kind: SamplerKind::Mh,
             // From the flicker-against-error sweep (docs/results.md): a twentieth of the
             // chains propose where nothing moves, and the rate rises with the target's change
             // so that chains follow a moving view or light (the knobs' defaults).
