@@ -102,5 +102,6 @@ if a.page:
         f"- machine: {cpu}, {os.cpu_count()} cores; load average {open('/proc/loadavg').read().split()[0]} at the end",
         f"- adapter: {adapter}",
         "",
+        "",
     ]
     open(a.page, "w").write("\n".join(head) + text + "\n")

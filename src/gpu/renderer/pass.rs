@@ -18,8 +18,8 @@ pub struct FramePass {
     pub writes: &'static [&'static str],
     /// What it computes (for the docs).
     pub what: &'static str,
-    /// Its binding tables (checked against its WGSL by `gpu::bindings`' tests).
-    // Read by the binding-table tests only.
+    /// Its binding tables, which `gpu::bindings`' tests (their only reader) check against its
+    /// WGSL.
     #[cfg_attr(not(test), allow(dead_code))]
     pub(crate) tables: &'static [&'static Pass],
     pub(super) runs: fn(&Renderer) -> bool,
