@@ -119,6 +119,9 @@ def adapter(irad, backend):
 
 def render(irad, backend, quick):
     out = WORK / f"render-{backend}"
+    # The script's own scratch folder: emptied, so that a folder an older irad wrote (before
+    # output folders had a manifest) is not refused.
+    shutil.rmtree(out, ignore_errors=True)
     flags = ["--backend", backend] + (["--frames", "0..12"] if quick else [])
     _, wall = sh([irad, "render", *flags, "--out", out])
     run = json.loads((out / "run.json").read_text())
