@@ -87,7 +87,9 @@ pub fn prepare_run_dir(dir: &Path, planned: BTreeSet<String>, overwrite: bool) -
         if !entry.file_type().is_ok_and(|t| t.is_file()) {
             continue;
         }
-        if listed.contains(&name) {
+        // A manifest is a file like any other: only names of irad's output shapes in it count,
+        // so an edited or planted manifest cannot make irad remove a user's other files.
+        if listed.contains(&name) && is_run_output(&name) {
             ours.push(name);
         } else if is_run_output(&name) {
             foreign.push(name);

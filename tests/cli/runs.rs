@@ -581,6 +581,14 @@ fn a_users_files_in_the_output_folder_are_never_deleted_without_overwrite() {
         manifest.contains("frame_0002.exr") && !manifest.contains("frame_0000"),
         "{manifest}"
     );
+    // A manifest that lists a user's file of another shape (edited or planted) does not make
+    // irad remove it: only names of irad's output shapes count.
+    let planted = manifest.replace("\"frame_0002.exr\"", "\"frame_0002.exr\", \"notes.txt\"");
+    assert_ne!(planted, manifest);
+    std::fs::write(out.join(".irad-manifest.json"), planted).unwrap();
+    let r = irad(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert_eq!(std::fs::read(out.join("notes.txt")).unwrap(), b"mine");
     std::fs::remove_dir_all(&out).unwrap();
 }
 
