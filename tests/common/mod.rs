@@ -42,6 +42,36 @@ pub fn render_config() -> irad::config::Render {
     c
 }
 
+/// Frame 0 of `scene` rendered on the GPU at `size` x `size` with `vpls` VPLs (the tests'
+/// [`render_config`], no supersampling), on the backend under test.
+pub fn gpu_frame(scene: &irad::scene::Scene, size: u32, vpls: u32) -> Hdr {
+    let backend = backend();
+    let mut cfg = render_config();
+    cfg.sequence.size = irad::config::Size {
+        width: size,
+        height: size,
+    };
+    cfg.vpls = vpls;
+    cfg.quality.aa = 1;
+    cfg.backend = backend;
+    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
+    let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
+    p.render_frame(0, true).unwrap().image.hdr
+}
+
+/// Frame 0 of `scene` path-traced at `size` x `size` with `spp` samples a pixel, seed 1.
+pub fn reference_frame(scene: &irad::scene::Scene, size: u32, spp: u32) -> Hdr {
+    let f = scene.at(0.0);
+    let t = irad::trace::Tracer::new(&f);
+    let s = irad::reference::ReferenceSettings {
+        width: size,
+        height: size,
+        spp,
+        seed: 1,
+    };
+    irad::reference::render(&f, &t, &s, &|| {})
+}
+
 pub fn backends() -> Vec<BackendChoice> {
     static FOUND: OnceLock<Vec<BackendChoice>> = OnceLock::new();
     let found = FOUND.get_or_init(|| {

@@ -5,7 +5,6 @@
 use crate::common::{self, quads::cornell_like, quads::load};
 use irad::image::Hdr;
 use irad::scene::Scene;
-use irad::trace::Tracer;
 
 const TEST: &str = "scale";
 const SIZE: u32 = 24;
@@ -15,30 +14,11 @@ fn scene(scale: f32, offset: f32) -> Scene {
 }
 
 fn gpu(scene: &Scene) -> Hdr {
-    let backend = common::backend();
-    let mut cfg = crate::common::render_config();
-    cfg.sequence.size = irad::config::Size {
-        width: SIZE,
-        height: SIZE,
-    };
-    cfg.vpls = 64;
-    cfg.quality.aa = 1;
-    cfg.backend = backend;
-    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
-    let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
-    p.render_frame(0, true).unwrap().image.hdr
+    common::gpu_frame(scene, SIZE, 64)
 }
 
 fn reference(scene: &Scene) -> Hdr {
-    let f = scene.at(0.0);
-    let t = Tracer::new(&f);
-    let s = irad::reference::ReferenceSettings {
-        width: SIZE,
-        height: SIZE,
-        spp: 64,
-        seed: 1,
-    };
-    irad::reference::render(&f, &t, &s, &|| {})
+    common::reference_frame(scene, SIZE, 64)
 }
 
 /// Measured on lavapipe: GPU within 0.00012 of the unscaled frame everywhere (the loader

@@ -9,36 +9,16 @@
 use crate::common::{self, quads::quad_under_light, quads::Panel};
 use irad::image::Hdr;
 use irad::scene::Scene;
-use irad::trace::Tracer;
 
 const TEST: &str = "single_sided";
 const SIZE: u32 = 32;
 
 fn gpu(scene: &Scene) -> Hdr {
-    let backend = common::backend();
-    let mut cfg = crate::common::render_config();
-    cfg.sequence.size = irad::config::Size {
-        width: SIZE,
-        height: SIZE,
-    };
-    cfg.vpls = 256;
-    cfg.quality.aa = 1;
-    cfg.backend = backend;
-    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(backend).unwrap());
-    let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
-    p.render_frame(0, true).unwrap().image.hdr
+    common::gpu_frame(scene, SIZE, 256)
 }
 
 fn reference(scene: &Scene) -> Hdr {
-    let f = scene.at(0.0);
-    let t = Tracer::new(&f);
-    let s = irad::reference::ReferenceSettings {
-        width: SIZE,
-        height: SIZE,
-        spp: 256,
-        seed: 1,
-    };
-    irad::reference::render(&f, &t, &s, &|| {})
+    common::reference_frame(scene, SIZE, 256)
 }
 
 #[test]
