@@ -592,22 +592,13 @@ fn a_users_files_in_the_output_folder_are_never_deleted_without_overwrite() {
     std::fs::remove_dir_all(&out).unwrap();
 }
 
-/// Issue 24 item 5: SIGINT after the first frames stops a render cleanly: exit status 130,
-/// run.json marked interrupted and listing the frames done (as frames.jsonl does), the GIF
-/// of those frames, no temporary file; the next run into the folder proceeds and removes a
-/// stray temporary that a killed run left.
-#[test]
-fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
-    let out = tmp("sigint");
-    let o = out.to_str().unwrap();
-    let mut args = vec!["render", "cornell-orbit", "--size", "32x32", "--out", o];
-    args.extend_from_slice(CHEAP);
-    let mut child = common::irad_command()
-        .args([&args[..], &["--frames", "0..2000"]].concat())
-        .env_remove("XDG_RUNTIME_DIR")
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
+/// Runs `cmd`, sends it SIGINT once `out` holds frame 2, and returns its exit status and
+/// stderr.
+fn interrupt_after_frame_2(
+    mut cmd: std::process::Command,
+    out: &std::path::Path,
+) -> (std::process::ExitStatus, String) {
+    let mut child = cmd.stderr(std::process::Stdio::piped()).spawn().unwrap();
     let start = std::time::Instant::now();
     while !out.join("frame_0002.png").exists() {
         assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
@@ -621,6 +612,23 @@ fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
     let status = child.wait().unwrap();
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    (status, err)
+}
+
+/// Issue 24 item 5: SIGINT after the first frames stops a render cleanly: exit status 130,
+/// run.json marked interrupted and listing the frames done (as frames.jsonl does), the GIF
+/// of those frames, no temporary file; the next run into the folder proceeds and removes a
+/// stray temporary that a killed run left.
+#[test]
+fn sigint_stops_a_render_cleanly_and_the_next_run_proceeds() {
+    let out = tmp("sigint");
+    let o = out.to_str().unwrap();
+    let mut args = vec!["render", "cornell-orbit", "--size", "32x32", "--out", o];
+    args.extend_from_slice(CHEAP);
+    let mut cmd = common::irad_command();
+    cmd.args([&args[..], &["--frames", "0..2000"]].concat())
+        .env_remove("XDG_RUNTIME_DIR");
+    let (status, err) = interrupt_after_frame_2(cmd, &out);
     assert_eq!(status.code(), Some(130), "{err}");
     assert!(err.contains("interrupted"), "{err}");
     let run: serde_json::Value =
@@ -680,24 +688,9 @@ fn sigint_stops_a_reference_cleanly() {
         "--spp",
         "4",
     ];
-    let mut child = common::irad_command()
-        .args([&args[..], &["--frames", "0..20000", "--out", o]].concat())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = std::time::Instant::now();
-    while !out.join("frame_0002.png").exists() {
-        assert!(start.elapsed().as_secs() < 120, "no frame 2 after 120 s");
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let kill = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let status = child.wait().unwrap();
-    let mut err = String::new();
-    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    let mut cmd = common::irad_command();
+    cmd.args([&args[..], &["--frames", "0..20000", "--out", o]].concat());
+    let (status, err) = interrupt_after_frame_2(cmd, &out);
     assert_eq!(status.code(), Some(130), "{err}");
     let run: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
