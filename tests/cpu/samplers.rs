@@ -341,14 +341,7 @@ fn same_seed_same_vpls_other_seed_other_vpls() {
             .flat_map(|c| c.to_array().map(f32::to_bits))
             .collect()
     };
-    for kind in [
-        SamplerKind::Uniform,
-        SamplerKind::Cdf,
-        SamplerKind::Mh,
-        SamplerKind::Frozen,
-        SamplerKind::Rejection,
-        SamplerKind::Smc,
-    ] {
+    for kind in SamplerKind::ALL {
         let mut a = Sampler::new(params(kind, 5));
         let mut b = Sampler::new(params(kind, 5));
         let mut other = Sampler::new(params(kind, 6));
