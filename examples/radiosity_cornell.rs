@@ -56,6 +56,7 @@ fn main() -> anyhow::Result<()> {
     let element_size: f32 = std::env::var("ELEMENT").map_or(Ok(0.15), |s| s.parse())?;
     let max_elements: usize = std::env::var("MAX_ELEMENTS").map_or(Ok(6000), |s| s.parse())?;
     let rays: usize = std::env::var("RAYS").map_or(Ok(400_000), |s| s.parse())?;
+    let tolerance: f32 = std::env::var("TOLERANCE").map_or(Ok(1e-2), |s| s.parse())?;
     let out = std::env::var("OUT").ok();
     println!("method        part       relMSE   rel_bias  elements  links     iters  rays        solve_s");
     for m in methods {
@@ -64,6 +65,7 @@ fn main() -> anyhow::Result<()> {
             element_size,
             max_elements,
             rays,
+            tolerance,
             ..RadiositySettings::default()
         };
         let sol = radiosity::solve(&f, &tr, &settings);

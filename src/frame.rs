@@ -62,6 +62,7 @@ impl Pipeline {
         let classical = resolved.radiosity.map(|settings| Classical {
             settings,
             cache: radiosity::Cache::default(),
+            progress: Box::new(|_| {}),
             // The same sub-samples per pixel as the frame it adds to (checked against the
             // adapter with the renderer's).
             pass: RadiosityPass::with_aa(
@@ -80,6 +81,16 @@ impl Pipeline {
             tracer,
             sampler,
         })
+    }
+
+    /// Sets what a classical method's solve tells how far it has got (nothing by default).
+    pub fn on_solve_progress(
+        &mut self,
+        progress: impl Fn(&radiosity::SolveProgress) + Send + Sync + 'static,
+    ) {
+        if let Some(c) = &mut self.classical {
+            c.progress = Box::new(progress);
+        }
     }
 
     /// Renders frame index `f` (the scene at time f / fps). With `components`, the direct and
@@ -208,6 +219,7 @@ impl Pipeline {
 struct Classical {
     settings: radiosity::RadiositySettings,
     cache: radiosity::Cache,
+    progress: Box<dyn Fn(&radiosity::SolveProgress) + Send + Sync>,
     pass: RadiosityPass,
 }
 
@@ -224,7 +236,9 @@ impl Classical {
         stages: &mut Vec<(&'static str, f64)>,
     ) -> Result<(RenderedImage, bool)> {
         let mut t = Instant::now();
-        let (solution, solved) = self.cache.get(frame, tracer, &self.settings);
+        let (solution, solved) = self
+            .cache
+            .get(frame, tracer, &self.settings, &*self.progress);
         if solved {
             let shaded =
                 radiosity::display::Shaded::new(frame, solution, radiosity::Part::Indirect);

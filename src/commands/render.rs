@@ -164,6 +164,8 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
     let mut gif = report::GifStream::create(&out.join("preview.gif"), cfg.sequence.fps)?;
     let mut means = StageMeans::default();
     let pb = report::progress(frames.len() as u64, "render");
+    let bar = pb.clone();
+    pipeline.on_solve_progress(move |s| bar.set_detail(s.to_string()));
     let mut done = 0;
     for f in frames.iter() {
         // A signal stops the run between frames: what is done is written as a whole run's.
@@ -171,6 +173,10 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
             break;
         }
         let fo = pipeline.render_frame(f, cfg.components)?;
+        // A signal during the frame (a long radiosity solve stops early): drop the frame.
+        if crate::interrupt::requested() {
+            break;
+        }
         // The record first: frames.jsonl lists every frame whose files are on disk (a run
         // killed between the two leaves a record whose files are missing, never the reverse).
         let record = FrameRecord::of(&fo);

@@ -272,7 +272,14 @@ impl Tree {
     }
 }
 
-pub fn solve(frame: &Frame, tracer: &Tracer, p: &HierarchicalSettings) -> Solution {
+/// Solves, telling `progress` the fraction done: each of the two passes is a tenth for the
+/// refinement, then its links' form factors (by count) and the sweeps.
+pub fn solve(
+    frame: &Frame,
+    tracer: &Tracer,
+    p: &HierarchicalSettings,
+    progress: &(dyn Fn(f32) + Sync),
+) -> Solution {
     let start = std::time::Instant::now();
     let top = Mesh::uniform(frame, p.top_size, usize::MAX);
     let mut tree = Tree { nodes: Vec::new() };
@@ -312,6 +319,10 @@ pub fn solve(frame: &Frame, tracer: &Tracer, p: &HierarchicalSettings) -> Soluti
             nd.radiance = nd.le + nd.lp + nd.rho * amb;
         }
         for pass in 0..2 {
+            // A signal stops the solve (the command drops the frame in flight).
+            if crate::interrupt::requested() {
+                break;
+            }
             let eps = p.eps * mean_le;
             let mut pairs = Vec::new();
             for a in 0..roots {
@@ -321,13 +332,25 @@ pub fn solve(frame: &Frame, tracer: &Tracer, p: &HierarchicalSettings) -> Soluti
                     }
                 }
             }
+            let base = 0.5 * pass as f32;
+            progress(base + 0.05);
             let nodes = &tree.nodes;
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let total = pairs.len().max(1);
             links = pairs
                 .par_iter()
                 .map(|&(r, s)| {
+                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if k.is_multiple_of(4096) {
+                        progress(base + 0.05 + 0.4 * k as f32 / total as f32);
+                    }
+                    let skip = crate::interrupt::requested();
                     let (nr, ns) = (&nodes[r as usize], &nodes[s as usize]);
-                    let (f, rays) =
-                        form_factor::between(&nr.c, nr.n, &ns.c, ns.n, Some(tracer), p.quality);
+                    let (f, rays) = if skip {
+                        (0.0, 0)
+                    } else {
+                        form_factor::between(&nr.c, nr.n, &ns.c, ns.n, Some(tracer), p.quality)
+                    };
                     (
                         Link {
                             receiver: r,
@@ -349,8 +372,8 @@ pub fn solve(frame: &Frame, tracer: &Tracer, p: &HierarchicalSettings) -> Soluti
             for nd in tree.nodes.iter_mut() {
                 nd.radiance = nd.le + nd.lp;
             }
+            progress(base + 0.45);
             stats.iterations += tree.solve(roots, &links, p.tolerance * mean_le, 500);
-            let _ = pass;
         }
     }
     stats.links = links.len();
@@ -403,7 +426,7 @@ mod tests {
             tolerance: 1e-4,
             quality: FormFactorAccuracy { points: 7, rays: 4 },
         };
-        let sol = solve(&f, &tr, &p);
+        let sol = solve(&f, &tr, &p, &|_| {});
         assert!(sol.stats.links > 0 && !sol.mesh.is_empty());
         let worst = sol
             .radiance

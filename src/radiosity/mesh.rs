@@ -18,6 +18,17 @@ pub struct Element {
     pub source: u32,
     pub normal: Vec3,
     pub area: f32,
+    /// The patch it lies in (see [`Mesh::mark_patches`]).
+    pub patch: u32,
+}
+
+/// A coarser triangle made of elements: progressive refinement shoots its dim light from
+/// patches, the lecture's patches-and-elements (substructuring) scheme.
+#[derive(Clone, Copy, Debug)]
+pub struct Patch {
+    pub corners: [Vec3; 3],
+    pub normal: Vec3,
+    pub area: f32,
 }
 
 /// A conforming triangle mesh of elements.
@@ -25,6 +36,9 @@ pub struct Element {
 pub struct Mesh {
     pub verts: Vec<Vec3>,
     pub elems: Vec<Element>,
+    /// The patches elements lie in: each element of the scene's own triangles until
+    /// [`Mesh::mark_patches`]; an element split later stays in its patch.
+    pub patches: Vec<Patch>,
     /// Elements holding each edge (key: smaller vertex first).
     edges: HashMap<(u32, u32), Vec<u32>>,
     /// Midpoint vertex of each edge split so far.
@@ -88,13 +102,50 @@ impl Mesh {
         m
     }
 
+    /// As [`Mesh::uniform`], with patches of edges at most `patch` long: the frame is meshed
+    /// to `patch` first, those elements become the patches, and they are split on to `target`.
+    pub fn uniform_with_patches(frame: &Frame, patch: f32, target: f32, budget: usize) -> Mesh {
+        let mut m = Mesh::from_frame(frame);
+        m.refine_to(patch, budget);
+        m.mark_patches();
+        m.refine_to(target, budget);
+        m
+    }
+
+    /// Makes every element its own patch (elements split later stay in it).
+    pub fn mark_patches(&mut self) {
+        self.patches = (0..self.elems.len())
+            .map(|e| Patch {
+                corners: self.corners(e),
+                normal: self.elems[e].normal,
+                area: self.elems[e].area,
+            })
+            .collect();
+        for (i, e) in self.elems.iter_mut().enumerate() {
+            e.patch = i as u32;
+        }
+    }
+
+    /// A new element, in a patch of its own.
     fn push(&mut self, v: [u32; 3], source: u32, normal: Vec3) -> u32 {
+        let patch = self.patches.len() as u32;
+        let id = self.push_in(v, source, normal, patch);
+        self.patches.push(Patch {
+            corners: self.corners(id as usize),
+            normal,
+            area: self.elems[id as usize].area,
+        });
+        id
+    }
+
+    fn push_in(&mut self, v: [u32; 3], source: u32, normal: Vec3, patch: u32) -> u32 {
         let id = self.elems.len() as u32;
         self.elems.push(Element {
             v,
             source,
             normal,
             area: 0.0,
+            patch,
         });
         self.set(id, v);
         id
@@ -184,11 +235,11 @@ impl Mesh {
                 .expect("edge map names an element holding the edge");
             let (x, y, z) = (v[i], v[(i + 1) % 3], v[(i + 2) % 3]);
             self.set(id, [x, m, z]);
-            let (source, normal) = {
+            let (source, normal, patch) = {
                 let e = &self.elems[id as usize];
-                (e.source, e.normal)
+                (e.source, e.normal, e.patch)
             };
-            born.push(self.push([m, y, z], source, normal));
+            born.push(self.push_in([m, y, z], source, normal, patch));
         }
         born
     }

@@ -264,9 +264,59 @@ impl RadiositySettings {
     }
 }
 
+/// Progressive refinement's patches, in element sizes.
+const PATCH_SIZE: f32 = 4.0;
+
+/// How far a solve has got, for a progress display.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolveProgress {
+    pub solver: Solver,
+    /// The refinement round (0: the first solve) and the last round there may be.
+    pub round: usize,
+    pub rounds: usize,
+    /// The fraction of this round's solve done, as the solver estimates it.
+    pub fraction: f32,
+    /// Elements in this round's mesh (hierarchical: its top level).
+    pub elements: usize,
+}
+
+impl std::fmt::Display for SolveProgress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} solve {:.0}% (round {} of at most {}, {} elements)",
+            self.solver.name(),
+            100.0 * self.fraction,
+            self.round + 1,
+            self.rounds + 1,
+            self.elements
+        )
+    }
+}
+
+/// The fraction of a residual-driven solve done: how far the unshot power `left` has come
+/// down from `source` toward `tolerance * source`, on a log scale (both solvers' residuals
+/// fall about geometrically).
+pub fn convergence(left: f32, source: f32, tolerance: f32) -> f32 {
+    if left <= 0.0 || source <= 0.0 || tolerance >= 1.0 {
+        return 1.0;
+    }
+    ((source / left).ln() / (1.0 / tolerance).ln()).clamp(0.0, 1.0)
+}
+
 /// Solves the frame with a classical method: mesh, solve, and adaptive refinement rounds
 /// (split where neighbours differ, solve again).
 pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution {
+    solve_with(frame, tracer, s, &|_| {})
+}
+
+/// [`solve`], telling `progress` how far it has got.
+pub fn solve_with(
+    frame: &Frame,
+    tracer: &Tracer,
+    s: &RadiositySettings,
+    progress: &(dyn Fn(&SolveProgress) + Sync),
+) -> Solution {
     let start = std::time::Instant::now();
     // Classical radiosity treats every surface as double-sided (docs/math.md, "Single-sided
     // surfaces"), its rays too.
@@ -277,24 +327,57 @@ pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution 
     } else {
         tracer
     };
-    let mut mesh = Mesh::uniform(frame, s.element_size, s.max_elements);
+    let mut mesh = if s.solver == Solver::Progressive {
+        Mesh::uniform_with_patches(
+            frame,
+            PATCH_SIZE * s.element_size,
+            s.element_size,
+            s.max_elements,
+        )
+    } else {
+        Mesh::uniform(frame, s.element_size, s.max_elements)
+    };
     let mut rounds = 0;
     let mut stats_rays = 0;
     let mut sol = loop {
+        let (round, elements) = (rounds, mesh.len());
+        let last = if s.solver == Solver::Hierarchical {
+            0
+        } else {
+            s.refine_rounds
+        };
+        let tell = |fraction: f32| {
+            progress(&SolveProgress {
+                solver: s.solver,
+                round,
+                rounds: last,
+                fraction,
+                elements,
+            })
+        };
         let sol = match s.solver {
             Solver::Progressive => {
-                progressive::solve(frame, tracer, mesh.clone(), &progressive_params(s))
+                progressive::solve(frame, tracer, mesh.clone(), &progressive_params(s), &tell)
             }
-            Solver::Hierarchical => {
-                hierarchical::solve(frame, tracer, &hierarchical::HierarchicalSettings::from(s))
-            }
+            Solver::Hierarchical => hierarchical::solve(
+                frame,
+                tracer,
+                &hierarchical::HierarchicalSettings::from(s),
+                &tell,
+            ),
             Solver::Stochastic => stochastic::solve(
                 frame,
                 tracer,
                 mesh.clone(),
                 &stochastic::StochasticSettings::from(s),
+                &tell,
             ),
         };
+        // Stopped by a signal: no more rounds (the command drops the frame in flight).
+        if crate::interrupt::requested() {
+            break sol;
+        }
+        tell(1.0);
         stats_rays += sol.stats.rays;
         if rounds >= s.refine_rounds || s.solver == Solver::Hierarchical {
             break sol;
@@ -334,12 +417,14 @@ pub struct Cache {
 
 impl Cache {
     /// The solution for `frame`, solving only if its triangles, materials or punctual lights
-    /// changed since the last call. Returns it and whether it was solved now.
+    /// changed since the last call. Returns it and whether it was solved now; a solve tells
+    /// `progress` how far it has got.
     pub fn get(
         &mut self,
         frame: &Frame,
         tracer: &Tracer,
         s: &RadiositySettings,
+        progress: &(dyn Fn(&SolveProgress) + Sync),
     ) -> (&Solution, bool) {
         let lights = &frame.emitters.lights;
         let same = self
@@ -347,7 +432,7 @@ impl Cache {
             .as_ref()
             .is_some_and(|(t, m, l)| *t == frame.tris && *m == frame.tri_material && l == lights);
         if !same || self.solution.is_none() {
-            self.solution = Some(solve(frame, tracer, s));
+            self.solution = Some(solve_with(frame, tracer, s, progress));
             self.key = Some((
                 frame.tris.clone(),
                 frame.tri_material.clone(),
@@ -365,6 +450,7 @@ fn progressive_params(s: &RadiositySettings) -> progressive::ProgressiveSettings
         max_shots: usize::MAX,
         bright: form_factor::FormFactorAccuracy { points: 4, rays: 7 },
         dim: form_factor::FormFactorAccuracy { points: 1, rays: 4 },
+        dim_from_patches: true,
     }
 }
 
@@ -423,7 +509,7 @@ mod tests {
         for t in [0.0, 0.5, 1.0] {
             let f = orbit.at(t);
             let tr = Tracer::new(&f);
-            let (_, solved) = cache.get(&f, &tr, &s);
+            let (_, solved) = cache.get(&f, &tr, &s, &|_| {});
             assert_eq!(solved, t == 0.0, "camera motion at t = {t}");
         }
         assert_eq!(cache.solves, 1);
@@ -432,7 +518,10 @@ mod tests {
         for t in [0.0, 0.5, 1.0] {
             let f = light.at(t);
             let tr = Tracer::new(&f);
-            assert!(cache.get(&f, &tr, &s).1, "the light moved at t = {t}");
+            assert!(
+                cache.get(&f, &tr, &s, &|_| {}).1,
+                "the light moved at t = {t}"
+            );
         }
         assert_eq!(cache.solves, 3);
         // A punctual light that moves solves again; one that stays does not.
@@ -442,7 +531,7 @@ mod tests {
         let mut cache = Cache::default();
         let solved: Vec<bool> = [&a, &a, &b]
             .iter()
-            .map(|f| cache.get(f, &tr, &s).1)
+            .map(|f| cache.get(f, &tr, &s, &|_| {}).1)
             .collect();
         assert_eq!(solved, [true, false, true]);
     }

@@ -27,9 +27,20 @@ pub struct ProgressiveSettings {
     pub bright: FormFactorAccuracy,
     /// ... and for the dimmer shots that follow.
     pub dim: FormFactorAccuracy,
+    /// Dim shots come from the mesh's patches (every element of the patch with the most
+    /// unshot power shoots their area-weighted mean at once) instead of single elements.
+    pub dim_from_patches: bool,
 }
 
-pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &ProgressiveSettings) -> Solution {
+/// Solves on `mesh`, telling `progress` the fraction done (see [`super::convergence`]) after
+/// every shot.
+pub fn solve(
+    frame: &Frame,
+    tracer: &Tracer,
+    mesh: Mesh,
+    p: &ProgressiveSettings,
+    progress: &(dyn Fn(f32) + Sync),
+) -> Solution {
     let start = std::time::Instant::now();
     let n = mesh.len();
     let (le, rho) = element_materials(frame, &mesh);
@@ -54,35 +65,73 @@ pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &ProgressiveSettings
         ..Default::default()
     };
     let mut left = emitted;
+    // Each patch's elements, and a scratch sum of unshot power per patch.
+    let mut members = vec![Vec::new(); mesh.patches.len()];
+    for (i, e) in mesh.elems.iter().enumerate() {
+        members[e.patch as usize].push(i);
+    }
+    let mut patch_power = vec![0.0f32; mesh.patches.len()];
     while emitted > 0.0 && stats.iterations < p.max_shots {
-        // The shooter: largest unshot power.
-        let (s, power) = (0..n)
-            .map(|i| (i, area[i] * luminance(unshot_e[i] + unshot_r[i])))
+        let power: Vec<f32> = (0..n)
+            .map(|i| area[i] * luminance(unshot_e[i] + unshot_r[i]))
+            .collect();
+        left = power.iter().sum();
+        // The shooter: the element of largest unshot power while shots are bright, then
+        // (with patches) the patch of largest unshot power.
+        let (s, top) = power
+            .iter()
+            .copied()
+            .enumerate()
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .unwrap_or((0, 0.0));
-        left = (0..n)
-            .map(|i| area[i] * luminance(unshot_e[i] + unshot_r[i]))
-            .sum();
-        if left <= p.tolerance * emitted || power <= 0.0 {
+        if left <= p.tolerance * emitted || top <= 0.0 {
             break;
         }
-        let q = if power >= 0.01 * emitted {
-            p.bright
+        progress(super::convergence(left, emitted, p.tolerance));
+        // A signal stops the solve (the command drops the frame in flight).
+        if crate::interrupt::requested() {
+            break;
+        }
+        let bright = top >= 0.01 * emitted;
+        let q = if bright { p.bright } else { p.dim };
+        let shooters: Vec<usize> = if bright || !p.dim_from_patches {
+            vec![s]
         } else {
-            p.dim
+            for (i, e) in mesh.elems.iter().enumerate() {
+                patch_power[e.patch as usize] += power[i];
+            }
+            let best = patch_power
+                .iter()
+                .enumerate()
+                .max_by(|a, b| a.1.total_cmp(b.1))
+                .map_or(0, |(k, _)| k);
+            patch_power.iter_mut().for_each(|x| *x = 0.0);
+            members[best].clone()
         };
-        let (cs, ns) = (corners[s], normals[s]);
+        // What the shooter sends: its unshot radiance (a patch: area-weighted mean of its
+        // elements'), from its triangle.
+        let (cs, ns, ue, ur) = if let [one] = shooters[..] {
+            (corners[one], normals[one], unshot_e[one], unshot_r[one])
+        } else {
+            let pa = &mesh.patches[mesh.elems[shooters[0]].patch as usize];
+            let a: f32 = shooters.iter().map(|&i| area[i]).sum();
+            let mean = |u: &[Vec3]| shooters.iter().map(|&i| u[i] * area[i]).sum::<Vec3>() / a;
+            (pa.corners, pa.normal, mean(&unshot_e), mean(&unshot_r))
+        };
         let ff: Vec<(f32, u32)> = (0..n)
             .into_par_iter()
             .map(|j| {
-                if j == s || rho[j].max_element() <= 0.0 {
+                if shooters.contains(&j) || rho[j].max_element() <= 0.0 {
                     (0.0, 0)
                 } else {
                     form_factor::between(&corners[j], normals[j], &cs, ns, Some(tracer), q)
                 }
             })
             .collect();
-        let (ue, ur) = (unshot_e[s], unshot_r[s]);
+        for &s in &shooters {
+            unshot_e[s] = Vec3::ZERO;
+            unshot_r[s] = Vec3::ZERO;
+        }
         for (j, &(f, rays)) in ff.iter().enumerate() {
             stats.rays += rays as u64;
             if f <= 0.0 {
@@ -95,8 +144,6 @@ pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &ProgressiveSettings
             radiance[j] += de + dr;
             unshot_r[j] += de + dr;
         }
-        unshot_e[s] = Vec3::ZERO;
-        unshot_r[s] = Vec3::ZERO;
         stats.iterations += 1;
     }
     let unshot: Vec<Vec3> = (0..n).map(|i| unshot_e[i] + unshot_r[i]).collect();
@@ -156,8 +203,9 @@ mod tests {
             max_shots: 100_000,
             bright: q,
             dim: q,
+            dim_from_patches: false,
         };
-        let sol = solve(&f, &tr, mesh.clone(), &p);
+        let sol = solve(&f, &tr, mesh.clone(), &p, &|_| {});
         assert!(sol.stats.residual <= 1e-7);
         // The same form factors, as a matrix: (I - rho F) L = Le, per channel.
         let (le, rho) = element_materials(&f, &mesh);
@@ -201,8 +249,9 @@ mod tests {
             max_shots: 1_000_000,
             bright: FormFactorAccuracy { points: 4, rays: 4 },
             dim: FormFactorAccuracy { points: 4, rays: 4 },
+            dim_from_patches: false,
         };
-        let sol = solve(&f, &tr, mesh, &p);
+        let sol = solve(&f, &tr, mesh, &p, &|_| {});
         // With the ambient term the unshot remainder is accounted for.
         let shown: Vec<Vec3> = (0..sol.radiance.len())
             .map(|i| sol.radiance[i] + sol.ambient[i])
@@ -220,5 +269,58 @@ mod tests {
         let leaving = sol.power(&sol.radiance).x / a;
         // In a closed box everything leaving arrives somewhere: L = Le + rho * (L - unshot).
         assert!((leaving - 2.0).abs() < 0.03, "mean radiance {leaving}");
+    }
+}
+
+#[cfg(test)]
+mod patch_tests {
+    use super::*;
+    use crate::scene::builtin;
+
+    /// Dim shots from patches (each patch four element sizes across) give the solution that
+    /// element-by-element shots give, in far fewer shots: the Cornell box at the default
+    /// tolerance and form-factor accuracies.
+    #[test]
+    fn patch_shots_agree_with_element_shots_in_fewer_shots() {
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let tr = Tracer::new(&f);
+        let mesh = Mesh::uniform_with_patches(&f, 1.2, 0.3, 6000);
+        let settings = |dim_from_patches| ProgressiveSettings {
+            tolerance: 1e-2,
+            max_shots: usize::MAX,
+            bright: FormFactorAccuracy { points: 4, rays: 7 },
+            dim: FormFactorAccuracy { points: 1, rays: 4 },
+            dim_from_patches,
+        };
+        let elements = solve(&f, &tr, mesh.clone(), &settings(false), &|_| {});
+        let patches = solve(&f, &tr, mesh, &settings(true), &|_| {});
+        let shown = |s: &Solution| s.display_values(crate::radiosity::Part::Reflected);
+        let (a, b) = (shown(&elements), shown(&patches));
+        let area = |i: usize| elements.mesh.elems[i].area;
+        let (mut num, mut den) = (0.0f64, 0.0f64);
+        for i in 0..a.len() {
+            let d = luminance(b[i]) - luminance(a[i]);
+            num += (area(i) * d * d) as f64;
+            den += (area(i) * luminance(a[i]).powi(2)) as f64;
+        }
+        let rel_mse = num / den;
+        let bias = luminance(patches.power(&b)) / luminance(elements.power(&a)) - 1.0;
+        println!(
+            "{} elements, {} patches: shots {} -> {}, relMSE {rel_mse:.5}, bias {bias:+.4}",
+            a.len(),
+            patches.mesh.patches.len(),
+            elements.stats.iterations,
+            patches.stats.iterations
+        );
+        // Measured: 1750 elements in 122 patches, 4973 shots -> 355, relMSE 0.00078 and
+        // bias -0.8% per element between the two.
+        assert!(rel_mse < 0.0015, "relMSE {rel_mse}");
+        assert!(bias.abs() < 0.012, "bias {bias}");
+        assert!(
+            patches.stats.iterations * 4 < elements.stats.iterations,
+            "shots {} against {}",
+            patches.stats.iterations,
+            elements.stats.iterations
+        );
     }
 }

@@ -41,8 +41,15 @@ impl From<&RadiositySettings> for StochasticSettings {
 /// the thread count).
 const CHUNK: usize = 4096;
 
-/// Solves on `mesh`; `tracer` (the frame's) gives the punctual lights' visibility.
-pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &StochasticSettings) -> Solution {
+/// Solves on `mesh`; `tracer` (the frame's) gives the punctual lights' visibility. Tells
+/// `progress` the fraction done (see [`super::convergence`]) after every iteration.
+pub fn solve(
+    frame: &Frame,
+    tracer: &Tracer,
+    mesh: Mesh,
+    p: &StochasticSettings,
+    progress: &(dyn Fn(f32) + Sync),
+) -> Solution {
     let start = std::time::Instant::now();
     let n = mesh.len();
     let (le, rho) = element_materials(frame, &mesh);
@@ -68,6 +75,11 @@ pub fn solve(frame: &Frame, tracer: &Tracer, mesh: Mesh, p: &StochasticSettings)
             let power: Vec<f32> = (0..n).map(|i| area[i] * luminance(unshot[i])).collect();
             left = power.iter().sum();
             if left <= p.tolerance * emitted || left <= 0.0 {
+                break;
+            }
+            progress(super::convergence(left, emitted, p.tolerance));
+            // A signal stops the solve (the command drops the frame in flight).
+            if crate::interrupt::requested() {
                 break;
             }
             let mut cdf = Vec::with_capacity(n);
@@ -162,7 +174,7 @@ mod tests {
             max_iterations: 100,
             seed: 3,
         };
-        let sol = solve(&f, &tr, mesh.clone(), &p);
+        let sol = solve(&f, &tr, mesh.clone(), &p, &|_| {});
         let a: f32 = sol.mesh.elems.iter().map(|e| e.area).sum();
         let shown: Vec<Vec3> = (0..sol.radiance.len())
             .map(|i| sol.radiance[i] + sol.ambient[i])
@@ -179,7 +191,7 @@ mod tests {
             .map(|l| (*l - Vec3::splat(2.0)).abs().max_element())
             .fold(0.0, f32::max);
         assert!(worst < 0.11, "worst {worst}");
-        let again = solve(&f, &tr, mesh, &p);
+        let again = solve(&f, &tr, mesh, &p, &|_| {});
         assert_eq!(sol.radiance, again.radiance);
     }
 }

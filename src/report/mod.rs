@@ -3,12 +3,13 @@
 pub mod charts;
 pub mod heatmap;
 pub mod html;
+mod progress;
 mod run_dir;
 
+pub use progress::Progress;
 pub use run_dir::{prepare_run_dir, run_files, RunDir, MANIFEST};
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::path::Path;
 
@@ -56,17 +57,9 @@ pub fn count(n: impl Into<u64>, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
 }
 
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress(len: u64, what: &str) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    pb.set_style(
-        ProgressStyle::with_template(
-            "{msg:>12} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta})",
-        )
-        .expect("static template"),
-    );
-    pb.set_message(what.to_string());
-    pb
+/// Progress on stderr: a bar on a terminal, plain lines elsewhere ([`Progress`]).
+pub fn progress(len: u64, what: &str) -> Progress {
+    Progress::new(len, what)
 }
 
 /// Writes an animated GIF of 8-bit RGB frames at `fps`.

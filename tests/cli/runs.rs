@@ -700,3 +700,62 @@ fn sigint_stops_a_reference_cleanly() {
     assert_eq!(frame_files(&out).len(), 2 * done);
     std::fs::remove_dir_all(&out).unwrap();
 }
+
+/// Issue 24 item 6: a classical solve shows its progress where stderr is not a terminal (a
+/// plain line per step with `IRAD_PROGRESS_SECONDS=0`), and SIGINT stops it inside the solve:
+/// the frame in flight is dropped, run.json is written marked interrupted.
+#[test]
+fn a_radiosity_solve_shows_progress_and_stops_on_sigint() {
+    use std::io::BufRead;
+    let out = tmp("solve-progress");
+    let o = out.to_str().unwrap();
+    let mut child = common::irad_command()
+        .args([
+            "render",
+            "cornell",
+            "--method",
+            "progressive",
+            "--size",
+            "16x16",
+        ])
+        .args(["--frames", "0..3", "--out", o])
+        .env("IRAD_PROGRESS_SECONDS", "0")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut seen = Vec::new();
+    // Wait until the solve has reported some progress, then interrupt it.
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        let solving = line.starts_with("render: 0/3 (0%)") && line.contains("progressive solve");
+        seen.push(line);
+        if solving && seen.len() >= 5 {
+            break;
+        }
+    }
+    let signalled = std::time::Instant::now();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    seen.extend(lines.map(|l| l.unwrap()));
+    let status = child.wait().unwrap();
+    let after = signalled.elapsed().as_secs_f64();
+    let err = seen.join("\n");
+    let percents: Vec<&String> = seen
+        .iter()
+        .filter(|l| l.contains("progressive solve") && l.contains("% (round 1 of at most 3"))
+        .collect();
+    assert!(percents.len() >= 5, "{err}");
+    assert_eq!(status.code(), Some(130), "{err}");
+    // The signal stops the solve within a shot: it never reports being done.
+    assert!(!err.contains("solve 100%"), "{err}");
+    assert!(after < 2.0, "exited {after:.2} s after the signal\n{err}");
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["interrupted"], true);
+    assert_eq!(run["frames_rendered"], 0, "{run}");
+    assert!(!out.join("frame_0000.exr").exists());
+}

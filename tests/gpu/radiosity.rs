@@ -45,9 +45,11 @@ fn gpu_display_matches_the_cpu_twin() {
         pass.upload(&gpu, &shaded);
         let img = pass.render(&gpu, &f).unwrap();
         let e = frame_error(&img, &cpu).unwrap();
-        // Measured on lavapipe and llvmpipe: relMSE 7.0e-4 (element edges falling on either
-        // side of a pixel centre), relative bias -1.7e-4.
-        if e.rel_mse > 1.05e-3 || e.rel_bias.abs() > 2.6e-4 {
+        // Measured on lavapipe and llvmpipe: relMSE 7.8e-4 (element edges falling on either
+        // side of a pixel centre), relative bias -3.3e-4 (-1.7e-4 on the mesh before
+        // progressive refinement meshed patches first).
+        println!("{b:?}: {e:?}");
+        if e.rel_mse > 1.2e-3 || e.rel_bias.abs() > 5e-4 {
             let name = format!("display-{b:?}").to_lowercase();
             let images = common::save_images("radiosity", &name, &img, &cpu);
             panic!("{b:?}: {e:?} ({images})");

@@ -19,6 +19,7 @@ use anyhow::Result;
 pub fn compare(cfg: &config::Compare) -> Result<()> {
     let plan = plan::Plan::new(cfg)?;
     let pb = crate::report::progress(work_units(&plan), "compare");
+    pb.set_detail("reference");
     let reference = reference_cache::load_or_render(&plan, &|| pb.inc(1))?;
     let motion = plan.motion();
     let floor = crate::metrics::floor::floor(
@@ -28,7 +29,7 @@ pub fn compare(cfg: &config::Compare) -> Result<()> {
         reference.spp,
         Some(&motion),
     )?;
-    let results = runs::run_all(&plan, &reference.frames, &motion, &|| pb.inc(1))?;
+    let results = runs::run_all(&plan, &reference.frames, &motion, &pb)?;
     pb.finish_and_clear();
     outputs::write(&plan, &reference.frames, &floor, &results)
 }

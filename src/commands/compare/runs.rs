@@ -70,13 +70,20 @@ fn run(
     reference: &[Hdr],
     motion: &[Vec<Option<crate::metrics::warp::Warp>>],
     spec: RunSpec,
-    tick: &dyn Fn(),
+    progress: &crate::report::Progress,
 ) -> Result<(RunRecord, Vec<Hdr>, FlickerMaps)> {
     let cfg = config::Render {
         method: spec.method,
         ..plan.cfg.run_with(spec.sampler, spec.vpls, spec.knob)
     };
     let mut p = Pipeline::new(plan.gpu.clone(), plan.scene.clone(), &cfg)?;
+    let label = match spec.method {
+        Method::Instant => label(spec.sampler, spec.vpls, spec.knob),
+        m => m.name().to_string(),
+    };
+    progress.set_detail(label.clone());
+    let bar = progress.clone();
+    p.on_solve_progress(move |s| bar.set_detail(format!("{label}: {s}")));
     let (mut imgs, mut seconds, mut replaced, mut acceptance) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for &f in &plan.numbers {
@@ -85,7 +92,7 @@ fn run(
         replaced.push(fo.selection.replaced);
         acceptance.push(fo.selection.acceptance);
         imgs.push(fo.image.hdr);
-        tick();
+        progress.inc(1);
     }
     let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
     let maps = flicker_maps(&imgs, reference, motion)?;
@@ -122,7 +129,7 @@ pub fn run_all(
     plan: &Plan,
     reference: &[Hdr],
     motion: &[Vec<Option<crate::metrics::warp::Warp>>],
-    tick: &dyn Fn(),
+    progress: &crate::report::Progress,
 ) -> Result<Results> {
     let mut results = Results {
         records: Vec::new(),
@@ -131,7 +138,7 @@ pub fn run_all(
         adapter: plan.gpu.adapter.to_string(),
     };
     for spec in plan.runs() {
-        let (record, imgs, maps) = run(plan, reference, motion, spec, tick)?;
+        let (record, imgs, maps) = run(plan, reference, motion, spec, progress)?;
         if spec.shown {
             results.shown.push((record.label(), imgs));
             results.flicker.push((record.label(), maps));
