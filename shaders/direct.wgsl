@@ -17,6 +17,34 @@
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> direct: array<vec4f>;
 @group(0) @binding(6) var<storage, read> surface: array<Surface>;
+// The environment (`gpu::direct::EnvironmentBuffer`): env[0] = (width, height, on, 0),
+// env[1..5] the columns of the camera's inverse view-projection, then the map's texels.
+@group(0) @binding(7) var<storage, read> env: array<vec4f>;
+
+// The environment's radiance toward the sub-sample `q` of the grid where it sees no geometry:
+// the direction through the pixel's centre (the sub-sample's tile offset left out), looked up
+// in the equirectangular map as `scene::environment::direction_uv` does.
+fn background(q: vec2u, p: FrameConstants) -> vec3f {
+    let head = env[0];
+    if head.z == 0.0 {
+        return vec3f(0.0);
+    }
+    let s = max(p.aa, 1u);
+    let size = vec2u(p.width, p.height) / s;
+    let px = vec2f(q % size) + 0.5;
+    let ndc = vec2f(px.x / f32(size.x) * 2.0 - 1.0, 1.0 - px.y / f32(size.y) * 2.0);
+    let inv = mat4x4f(env[1], env[2], env[3], env[4]);
+    let a = inv * vec4f(ndc, 0.0, 1.0);
+    let b = inv * vec4f(ndc, 1.0, 1.0);
+    let d = normalize(b.xyz / b.w - a.xyz / a.w);
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    let u = fract(0.5 + atan2(d.x, -d.z) / (2.0 * PI));
+    let w = u32(head.x);
+    let h = u32(head.y);
+    let i = min(u32(u * head.x), w - 1u);
+    let j = min(u32(v * head.y), h - 1u);
+    return env[8u + j * w + i].xyz;
+}
 
 // Face index (0: +n, 1: +t, 2: -t, 3: +b, 4: -b) and its (right, up, fwd) local coordinates
 // of a direction with local coordinates l = (t, b, n) components.
@@ -44,7 +72,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
     let pix = gid.y * p.width + gid.x;
     if g.w == 0u {
-        direct[pix] = vec4f(0.0);
+        direct[pix] = vec4f(background(gid.xy, p), 1.0);
         return;
     }
     let tri = tris[g.w - 1u];

@@ -41,6 +41,19 @@ pub enum SampleKind {
     /// `position` is the centre of a square `2 extent` wide facing it behind the geometry
     /// (its shadow map's).
     Directional { extent: f32 },
+    /// A direction drawn from the environment, drawn as a directional light: irradiance
+    /// `radiance` (`L(w) / (pdf(w) count)`, W/m^2) travelling along `normal`, with its map
+    /// as a directional light's.
+    Environment { extent: f32 },
+}
+
+impl SampleKind {
+    /// Whether the sample is one of a stratified draw whose count sets its variance (a point
+    /// on an emitter triangle or a direction of the environment), rather than a punctual
+    /// light taken exactly.
+    pub fn is_sampled(&self) -> bool {
+        matches!(self, SampleKind::Area | SampleKind::Environment { .. })
+    }
 }
 
 impl EmitterSample {
@@ -48,7 +61,7 @@ impl EmitterSample {
     /// visibility (direct radiance is `rho/pi` times the sum of these over the samples that
     /// see `x`), with the point and normal whose visibility from `x` counts. None: no light.
     pub fn irradiance_at(&self, x: Vec3, n: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
-        if let SampleKind::Directional { .. } = self.kind {
+        if let SampleKind::Directional { .. } | SampleKind::Environment { .. } = self.kind {
             let cos_x = -n.dot(self.normal);
             let back = x - self.normal * self.normal.dot(x - self.position);
             return (cos_x > 0.0).then(|| (self.radiance * cos_x, back, Vec3::ZERO));
@@ -78,7 +91,7 @@ impl EmitterSample {
                 .falloff(cos_l),
                 Vec3::ZERO,
             ),
-            SampleKind::Directional { .. } => unreachable!(),
+            SampleKind::Directional { .. } | SampleKind::Environment { .. } => unreachable!(),
         };
         (f > 0.0).then(|| (self.radiance * (f * cos_x / d2), self.position, nl))
     }
@@ -95,7 +108,16 @@ impl Frame {
         let em = &self.emitters;
         let mut out = self.punctual_samples(seed, count);
         let count = count - out.len();
+        // The environment takes the rest, or half of it when emitter triangles share it.
+        let env = match (&em.environment, em.tris.is_empty()) {
+            (None, _) => 0,
+            (Some(_), true) => count,
+            (Some(_), false) => count / 2,
+        };
+        let count = count - env;
+        let env_samples = self.environment_samples(seed, env);
         if em.tris.is_empty() || count == 0 {
+            out.extend(env_samples);
             return out;
         }
         let mut r = crate::math::rng(&[seed, 0xd1ec7]);
@@ -114,7 +136,41 @@ impl Frame {
                 tri: Some(tri as u32),
             }
         }));
+        out.extend(env_samples);
         out
+    }
+
+    /// `count` directions from the environment's distribution, each a directional light of
+    /// irradiance `L / (pdf count)`: stratified in the first of the two numbers (bands of
+    /// latitude in the map's distribution, so consecutive samples are strata), a golden-ratio
+    /// sequence in the second (docs/math.md, "The environment").
+    fn environment_samples(&self, seed: u64, count: usize) -> Vec<EmitterSample> {
+        use rand::Rng;
+        let em = &self.emitters;
+        let Some(env) = em.environment.as_deref().filter(|_| count > 0) else {
+            return Vec::new();
+        };
+        let mut r = crate::math::rng(&[seed, 0xe4f1]);
+        let shift: f32 = r.random();
+        let (c, radius) = em.sphere;
+        let extent = radius * 1.01;
+        (0..count)
+            .filter_map(|j| {
+                let u = glam::Vec2::new(
+                    ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7),
+                    (shift + j as f32 * 0.618_034).fract(),
+                );
+                let (w, le, p) = env.sample(u);
+                (p > 0.0).then(|| EmitterSample {
+                    position: c + w * extent,
+                    normal: -w,
+                    radiance: le / (p * count as f32),
+                    kind: SampleKind::Environment { extent },
+                    reach: 2.0 * extent,
+                    tri: None,
+                })
+            })
+            .collect()
     }
 
     /// The punctual lights' samples of [`Frame::emitter_samples`] (at most `count`).
