@@ -57,6 +57,14 @@ fn a_scene_without_lights_renders_under_the_sky_with_a_note() {
     let img = irad::image::Hdr::read(&out.join("frame_0000.exr")).unwrap();
     assert!(common::mean_lum(&img) > 0.1, "a dark frame");
 
+    // `irad scenes` says what lights it.
+    let o = irad(&["scenes", scene]);
+    let listed = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        listed.contains("environment sky (the default: nothing in the file lights the scene)"),
+        "{listed}"
+    );
+
     let out = dir.join("reference");
     let o = irad(&[
         "reference",
