@@ -50,11 +50,21 @@ pub fn resolve(
         .max(1);
     renderer.light_samples = light_samples(cfg, frame0, tracer, most);
     let em = &frame0.emitters;
-    if renderer.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
+    let kinds: Vec<&str> = [
+        (!em.tris.is_empty(), "emitting triangles"),
+        (!em.lights.is_empty(), "punctual lights"),
+        (em.environment.is_some(), "an environment"),
+    ]
+    .into_iter()
+    .filter_map(|(has, what)| has.then_some(what))
+    .collect();
+    if kinds.len() > 1 && (renderer.light_samples as usize) < kinds.len() {
         bail!(
-            "`light_samples` {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
+            "`light_samples` {}: scene '{}' has {}, which need at least {} samples (one for each)",
             renderer.light_samples,
-            scene.name
+            scene.name,
+            kinds.join(" and "),
+            kinds.len()
         );
     }
     renderer.ism_points = ism_points(cfg, frame0, tracer);

@@ -112,7 +112,7 @@ impl Frame {
         let env = match (&em.environment, em.tris.is_empty()) {
             (None, _) => 0,
             (Some(_), true) => count,
-            (Some(_), false) => count / 2,
+            (Some(_), false) => (count / 2).max(count.min(1)),
         };
         let count = count - env;
         let env_samples = self.environment_samples(seed, env);
@@ -189,8 +189,10 @@ impl Frame {
         };
         let needed: usize = em.lights.iter().map(slots).sum();
         let has_area = !em.tris.is_empty();
+        // One slot at least for the emitter triangles and one for the environment, if any.
+        let reserve = has_area as usize + em.environment.is_some() as usize;
         let mut out = Vec::new();
-        if needed + has_area as usize <= count {
+        if needed + reserve <= count {
             for l in &em.lights {
                 self.push_light(&mut out, l, 1.0, None);
             }
@@ -200,7 +202,7 @@ impl Frame {
         let share = 1.0 - em.area_share();
         // (With a single sample for both kinds the lights take it: `Pipeline::new` refuses
         // that count, so this only keeps any other caller from a panic.)
-        let most = count.saturating_sub(has_area as usize).max(1);
+        let most = count.saturating_sub(reserve).max(1);
         let budget = ((count as f32 * share).round() as usize).clamp(1, most);
         let k = (budget / 2).max(1);
         let mut r = crate::math::rng(&[seed, 0x9c7a1]);

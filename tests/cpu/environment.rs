@@ -110,3 +110,63 @@ fn light_paths_from_the_sky_carry_the_power_it_sends() {
     );
     assert!(se < 0.01 * expected);
 }
+
+/// The environment gets its share of the emitter samples beside emitter triangles (half of
+/// what the punctual lights leave), and a sample count that cannot give each kind of light
+/// one is refused, naming `light_samples`.
+#[test]
+fn the_environment_shares_the_emitter_samples() {
+    use irad::scene::SampleKind;
+    let mut scene = irad::scene::builtin::load("cornell").unwrap().unwrap();
+    scene.environment = Some(Arc::new(Environment::sky()));
+    let f = scene.at(0.0);
+    let count = |n: usize| {
+        let s = f.emitter_samples(1, n);
+        let env = s
+            .iter()
+            .filter(|l| matches!(l.kind, SampleKind::Environment { .. }))
+            .count();
+        let area = s.iter().filter(|l| l.kind == SampleKind::Area).count();
+        (env, area)
+    };
+    assert_eq!(count(2), (1, 1));
+    assert_eq!(count(9), (4, 5));
+    // Beside a point light (two slots, back to back), two samples leave one to the
+    // environment: half the light, doubled.
+    let mut q = Quads::default();
+    let m = q.material(0.5, 0.0, true);
+    q.quad([0.; 3], [0., 0., 2.], [2., 0., 0.], m, json!({}));
+    let mut doc = q.finish();
+    doc["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    doc["extensions"] =
+        json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 683.0 }] } });
+    doc["nodes"].as_array_mut().unwrap().push(
+        json!({ "translation": [0., 1., 0.], "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
+    );
+    doc["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(1));
+    let mut lamp = quads::load(&doc);
+    lamp.environment = Some(Arc::new(Environment::sky()));
+    let kinds: Vec<SampleKind> = lamp
+        .at(0.0)
+        .emitter_samples(1, 2)
+        .iter()
+        .map(|l| l.kind)
+        .collect();
+    assert!(
+        kinds.len() == 2
+            && kinds[0] == SampleKind::PointHalf
+            && matches!(kinds[1], SampleKind::Environment { .. }),
+        "{kinds:?}"
+    );
+    let mut cfg = irad::config::Render::default();
+    cfg.quality.light_samples = 1;
+    let t = irad::trace::Tracer::new(&f);
+    let e = irad::resolve::resolve(&cfg, &scene, &f, &t, &Default::default()).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "`light_samples` 1: scene 'cornell' has emitting triangles and an environment, which need at least 2 samples (one for each)"
+    );
+}
