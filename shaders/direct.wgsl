@@ -2,7 +2,8 @@
 // shadow hemicube gives. A sample's kind is in pos.w: 0 a point on an emitter triangle, 1 half
 // a point light (intensity into the hemisphere around normal), 2 a spot light (normal.w and
 // radiance.w: the cosines of its inner and outer cone), 3 a directional light (irradiance
-// along normal; pos the centre of its orthographic map, normal.w its half-width), 4 a point light
+// along normal; pos the centre of its orthographic map, normal.w its half-width, radiance.w
+// the fraction of the depth bias it takes, 0 for all: an environment sample's), 4 a point light
 // outside the geometry (intensity toward it, normal the axis of one shadow face zoomed to the
 // half-width normal.w at unit distance).
 // Supersampled (P.aa = S > 1) with at least S^2 samples, the S^2 sub-samples of a pixel split
@@ -98,7 +99,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             let uv = vec2f(dot(q, basis_t(ln)), dot(q, basis_b(ln))) / ext;
             let texel = clamp(vec2i(floor(vec2f(uv.x * 0.5 + 0.5, 0.5 - 0.5 * uv.y) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
             let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u), 0).x);
-            let bias = p.shadow_bias * ext * (2.0 / size) * (1.0 + slope(cos_x)) + p.near;
+            // An environment sample's maps take a fraction (radiance.w) of the bias.
+            let scale = select(1.0, ls.radiance.w, ls.radiance.w > 0.0);
+            let bias = scale * p.shadow_bias * ext * (2.0 / size) * (1.0 + slope(cos_x)) + p.near;
             if stored > 0.0 && stored < dot(q, ln) - bias {
                 continue;
             }

@@ -433,9 +433,8 @@ impl ShadowMaps {
         for (j, s) in samples.iter().enumerate() {
             // A punctual light may lie far outside the geometry: its maps reach past it.
             let (near, far, ortho) = match s.kind {
-                SampleKind::Directional { extent } | SampleKind::Environment { extent } => {
-                    (0.0, 2.0 * extent, extent)
-                }
+                SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
+                SampleKind::Environment { extent } => (0.0, s.reach, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
             for (k, (r, u, f), viewport) in drawn_faces(s, lit[j], self.size) {

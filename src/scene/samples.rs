@@ -42,8 +42,9 @@ pub enum SampleKind {
     /// (its shadow map's).
     Directional { extent: f32 },
     /// A direction drawn from the environment, drawn as a directional light: irradiance
-    /// `radiance` (`L(w) / (pdf(w) count)`, W/m^2) travelling along `normal`, with its map
-    /// as a directional light's.
+    /// `radiance` (`L(w) / (pdf(w) count)`, W/m^2) travelling along `normal`. `position` is the
+    /// centre of a square `2 extent` wide facing it behind the geometry, fitted to the
+    /// geometry's box (not its sphere), and the map's depth range is `reach`.
     Environment { extent: f32 },
 }
 
@@ -95,6 +96,27 @@ impl EmitterSample {
         };
         (f > 0.0).then(|| (self.radiance * (f * cos_x / d2), self.position, nl))
     }
+}
+
+/// The orthographic shadow map along unit direction `n` that holds the box of `corners`:
+/// the centre of its square (behind the box along `n`, at the middle of the box's projection
+/// across), its half-width (the larger of the projection's two, 1% wider) and its depth range.
+/// Narrower than the sphere around the box, so its texels are finer (by up to `sqrt 3` for a
+/// cube seen along an axis).
+fn fit_map(n: Vec3, corners: &[Vec3]) -> (Vec3, f32, f32) {
+    let (t, b) = crate::math::basis(n);
+    let range = |a: Vec3| {
+        corners
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(a.dot(*c)), hi.max(a.dot(*c)))
+            })
+    };
+    let ((t0, t1), (b0, b1), (n0, n1)) = (range(t), range(b), range(n));
+    let half = (0.5 * (t1 - t0)).max(0.5 * (b1 - b0)).max(1e-6) * 1.01;
+    let margin = 0.01 * half + 0.005 * (n1 - n0);
+    let position = t * (0.5 * (t0 + t1)) + b * (0.5 * (b0 + b1)) + n * (n0 - margin);
+    (position, half, (n1 - n0) + 2.0 * margin)
 }
 
 impl Frame {
@@ -152,8 +174,16 @@ impl Frame {
         };
         let mut r = crate::math::rng(&[seed, 0xe4f1]);
         let shift: f32 = r.random();
-        let (c, radius) = em.sphere;
-        let extent = radius * 1.01;
+        let (lo, hi) = self.bounds();
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
         (0..count)
             .filter_map(|j| {
                 let u = glam::Vec2::new(
@@ -161,12 +191,13 @@ impl Frame {
                     (shift + j as f32 * 0.618_034).fract(),
                 );
                 let (w, le, p) = env.sample(u);
+                let (position, extent, reach) = fit_map(-w, &corners);
                 (p > 0.0).then(|| EmitterSample {
-                    position: c + w * extent,
+                    position,
                     normal: -w,
                     radiance: le / (p * count as f32),
                     kind: SampleKind::Environment { extent },
-                    reach: 2.0 * extent,
+                    reach,
                     tri: None,
                 })
             })
