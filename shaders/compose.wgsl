@@ -1,4 +1,5 @@
-// Compose: emission seen from the camera (front faces only) + direct + indirect, then exposure
+// Compose: emission seen from the camera (front faces only) + direct + indirect (where no
+// geometry is seen, the environment the direct pass wrote), then exposure
 // and the sRGB transfer for the 8-bit preview.
 // Supersampled (P.aa = S > 1) it runs on every sub-sample of the grid of S x S tiles, while
 // the indirect light (gather and interleave filter) was computed once per pixel, on tile 0,
@@ -69,8 +70,12 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         } else {
             c += direct[pix].xyz + indirect[pix].xyz;
         }
-    } else if P.aa > 1u {
-        indirect_ss[pix] = vec4f(0.0);
+    } else {
+        // No geometry: the environment, which the direct pass wrote there.
+        c = direct[pix].xyz;
+        if P.aa > 1u {
+            indirect_ss[pix] = vec4f(0.0);
+        }
     }
     hdr[pix] = vec4f(c, 1.0);
     // Supersampled, `resolve` makes the preview from the box-filtered pixels.

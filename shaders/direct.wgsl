@@ -2,7 +2,8 @@
 // shadow hemicube gives. A sample's kind is in pos.w: 0 a point on an emitter triangle, 1 half
 // a point light (intensity into the hemisphere around normal), 2 a spot light (normal.w and
 // radiance.w: the cosines of its inner and outer cone), 3 a directional light (irradiance
-// along normal; pos the centre of its orthographic map, normal.w its half-width), 4 a point light
+// along normal; pos the centre of its orthographic map, normal.w its half-width, radiance.w
+// the fraction of the depth bias it takes, 0 for all: an environment sample's), 4 a point light
 // outside the geometry (intensity toward it, normal the axis of one shadow face zoomed to the
 // half-width normal.w at unit distance).
 // Supersampled (P.aa = S > 1) with at least S^2 samples, the S^2 sub-samples of a pixel split
@@ -17,6 +18,34 @@
 @group(0) @binding(4) var gbuf: texture_2d<u32>;
 @group(0) @binding(5) var<storage, read_write> direct: array<vec4f>;
 @group(0) @binding(6) var<storage, read> surface: array<Surface>;
+// The environment (`gpu::direct::EnvironmentBuffer`): env[0] = (width, height, on, 0),
+// env[1..5] the columns of the camera's inverse view-projection, then the map's texels.
+@group(0) @binding(7) var<storage, read> env: array<vec4f>;
+
+// The environment's radiance toward the sub-sample `q` of the grid where it sees no geometry:
+// the direction through the pixel's centre (the sub-sample's tile offset left out), looked up
+// in the equirectangular map as `scene::environment::direction_uv` does.
+fn background(q: vec2u, p: FrameConstants) -> vec3f {
+    let head = env[0];
+    if head.z == 0.0 {
+        return vec3f(0.0);
+    }
+    let s = max(p.aa, 1u);
+    let size = vec2u(p.width, p.height) / s;
+    let px = vec2f(q % size) + 0.5;
+    let ndc = vec2f(px.x / f32(size.x) * 2.0 - 1.0, 1.0 - px.y / f32(size.y) * 2.0);
+    let inv = mat4x4f(env[1], env[2], env[3], env[4]);
+    let a = inv * vec4f(ndc, 0.0, 1.0);
+    let b = inv * vec4f(ndc, 1.0, 1.0);
+    let d = normalize(b.xyz / b.w - a.xyz / a.w);
+    let v = acos(clamp(d.y, -1.0, 1.0)) / PI;
+    let u = fract(0.5 + atan2(d.x, -d.z) / (2.0 * PI));
+    let w = u32(head.x);
+    let h = u32(head.y);
+    let i = min(u32(u * head.x), w - 1u);
+    let j = min(u32(v * head.y), h - 1u);
+    return env[8u + j * w + i].xyz;
+}
 
 // Face index (0: +n, 1: +t, 2: -t, 3: +b, 4: -b) and its (right, up, fwd) local coordinates
 // of a direction with local coordinates l = (t, b, n) components.
@@ -44,7 +73,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
     let pix = gid.y * p.width + gid.x;
     if g.w == 0u {
-        direct[pix] = vec4f(0.0);
+        direct[pix] = vec4f(background(gid.xy, p), 1.0);
         return;
     }
     let tri = tris[g.w - 1u];
@@ -70,7 +99,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
             let uv = vec2f(dot(q, basis_t(ln)), dot(q, basis_b(ln))) / ext;
             let texel = clamp(vec2i(floor(vec2f(uv.x * 0.5 + 0.5, 0.5 - 0.5 * uv.y) * size)), vec2i(0), vec2i(i32(p.shadow_size) - 1));
             let stored = bitcast<f32>(textureLoad(shadows, texel, i32(j * 5u), 0).x);
-            let bias = p.shadow_bias * ext * (2.0 / size) * (1.0 + slope(cos_x)) + p.near;
+            // An environment sample's maps take a fraction (radiance.w) of the bias.
+            let scale = select(1.0, ls.radiance.w, ls.radiance.w > 0.0);
+            let bias = scale * p.shadow_bias * ext * (2.0 / size) * (1.0 + slope(cos_x)) + p.near;
             if stored > 0.0 && stored < dot(q, ln) - bias {
                 continue;
             }

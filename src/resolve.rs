@@ -34,6 +34,14 @@ pub fn resolve(
     tracer: &Tracer,
     limits: &wgpu::Limits,
 ) -> Result<Resolved> {
+    if let (Some(solver), Some(env)) = (cfg.method.solver(), &frame0.emitters.environment) {
+        bail!(
+            "`method` {}: the classical radiosity solvers do not take an environment's light (scene '{}' is lit by the environment {}); use `method` instant",
+            solver.name(),
+            scene.name,
+            env.name
+        );
+    }
     let mut renderer = bounds(cfg, frame0.tris.len());
     // Within the adapter's shadow layers, 5 a sample, and irad's cap on a texture's bytes.
     let per_sample = crate::gpu::renderer::shadow_bytes(1, cfg.quality.shadow_size);
@@ -42,11 +50,21 @@ pub fn resolve(
         .max(1);
     renderer.light_samples = light_samples(cfg, frame0, tracer, most);
     let em = &frame0.emitters;
-    if renderer.light_samples < 2 && !em.tris.is_empty() && !em.lights.is_empty() {
+    let kinds: Vec<&str> = [
+        (!em.tris.is_empty(), "emitting triangles"),
+        (!em.lights.is_empty(), "punctual lights"),
+        (em.environment.is_some(), "an environment"),
+    ]
+    .into_iter()
+    .filter_map(|(has, what)| has.then_some(what))
+    .collect();
+    if kinds.len() > 1 && (renderer.light_samples as usize) < kinds.len() {
         bail!(
-            "`light_samples` {}: scene '{}' has emitting triangles and punctual lights, which need at least 2 samples (one for each)",
+            "`light_samples` {}: scene '{}' has {}, which need at least {} samples (one for each)",
             renderer.light_samples,
-            scene.name
+            scene.name,
+            kinds.join(" and "),
+            kinds.len()
         );
     }
     renderer.ism_points = ism_points(cfg, frame0, tracer);
@@ -208,15 +226,14 @@ pub fn light_samples(cfg: &Render, frame0: &Frame, tracer: &Tracer, most: u32) -
     if cfg.quality.light_samples > 0 {
         return cfg.quality.light_samples;
     }
-    use crate::scene::SampleKind;
     let seed = cfg.sequence.seed ^ 0x11647;
     // The punctual lights take their slots first (`Frame::emitter_samples`): 256 area
     // samples after them, so that each of up to 64 strata holds 4 or more.
     let punctual =
-        |s: &[crate::scene::EmitterSample]| s.iter().filter(|l| l.kind != SampleKind::Area).count();
+        |s: &[crate::scene::EmitterSample]| s.iter().filter(|l| !l.kind.is_sampled()).count();
     let exact = punctual(&frame0.emitter_samples(seed, 256));
     let samples = frame0.emitter_samples(seed, 256 + exact);
-    let area = samples.iter().any(|l| l.kind == SampleKind::Area);
+    let area = samples.iter().any(|l| l.kind.is_sampled());
     let size = &cfg.sequence.size;
     let rows = (64 * size.height).div_ceil(size.width.max(1)).clamp(1, 256);
     let points = crate::reference::twin::pixel_points(frame0, tracer, 64, rows);

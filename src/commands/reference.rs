@@ -12,6 +12,8 @@ use std::time::Instant;
 struct ReferenceRun<'a> {
     command: &'static str,
     scene: &'a str,
+    /// The environment that lit the run (see `irad render`'s run.json).
+    environment: Option<String>,
     settings: &'a config::Reference,
     frames: Vec<ReferenceFrame>,
     threads: usize,
@@ -78,6 +80,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     let mut record = ReferenceRun {
         command: "reference",
         scene: spec,
+        environment: scene.environment.as_deref().map(|e| e.name.clone()),
         settings: cfg,
         frames: Vec::new(),
         threads: rayon::current_num_threads(),

@@ -116,6 +116,9 @@ impl StageMeans {
 struct RunRecord<'a> {
     command: &'static str,
     scene: &'a str,
+    /// The environment that lit the run (`sky` or a map's path; null: none), whether chosen
+    /// by `--environment` or given by the loader to a scene without lights.
+    environment: Option<&'a str>,
     adapter: &'a AdapterDesc,
     settings: &'a config::Render,
     /// What the resolve step chose for the scene and adapter (`crate::resolve`).
@@ -196,6 +199,11 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
         &RunRecord {
             command: "render",
             scene: spec,
+            environment: pipeline
+                .scene
+                .environment
+                .as_deref()
+                .map(|e| e.name.as_str()),
             adapter: &adapter,
             settings: cfg,
             gpu: &pipeline.renderer.config,

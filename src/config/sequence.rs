@@ -5,6 +5,8 @@ use super::*;
 use crate::scene::Scene;
 use anyhow::{bail, Result};
 use serde::Serialize;
+use std::path::PathBuf;
+use std::sync::Arc;
 
 /// A half-open frame range `A..B`, or a single frame `N`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -209,6 +211,70 @@ impl CameraSpec {
     }
 }
 
+/// `--environment`: what lights a scene from where rays meet no geometry.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnvironmentChoice {
+    /// The default sky: a constant radiance
+    /// ([`crate::scene::environment::SKY_RADIANCE`]) in every direction.
+    Sky,
+    /// No environment: a scene without emitters is refused, as before irad had one.
+    None,
+    /// An equirectangular radiance map (.hdr or .exr), read wherever it is (the user named it).
+    File(PathBuf),
+}
+
+impl std::str::FromStr for EnvironmentChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Ok(match s {
+            "sky" => EnvironmentChoice::Sky,
+            "none" => EnvironmentChoice::None,
+            "" => return Err("an empty --environment: use sky, none or a .hdr/.exr file".into()),
+            _ => EnvironmentChoice::File(PathBuf::from(s)),
+        })
+    }
+}
+
+impl std::fmt::Display for EnvironmentChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            EnvironmentChoice::Sky => f.write_str("sky"),
+            EnvironmentChoice::None => f.write_str("none"),
+            EnvironmentChoice::File(p) => write!(f, "{}", p.display()),
+        }
+    }
+}
+
+impl Serialize for EnvironmentChoice {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+impl EnvironmentChoice {
+    /// Puts this environment in `scene`: `sky` or a map for any scene; `none` takes away the
+    /// default sky the loader gave a scene without emitters, and so refuses it. Errors name
+    /// the setting (`` `environment` ``) and say what is wrong with the file.
+    pub fn apply(&self, scene: &mut Scene) -> Result<()> {
+        use crate::scene::Environment;
+        match self {
+            EnvironmentChoice::Sky => scene.environment = Some(Arc::new(Environment::sky())),
+            EnvironmentChoice::None => {
+                if let Some(why) = &scene.unlit {
+                    bail!("{why} (`environment` none: no default sky)");
+                }
+                scene.environment = None;
+            }
+            EnvironmentChoice::File(p) => {
+                let env = crate::scene::load::read_environment(p)
+                    .map_err(|e| anyhow::anyhow!("`environment` {e}"))?;
+                scene.environment = Some(Arc::new(env));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Loads a built-in scene or a glTF file (nothing outside its folder) and prints its warnings.
 pub fn load_scene(spec: &str) -> Result<Scene> {
     load_scene_with(spec, &Default::default())
@@ -253,6 +319,12 @@ pub struct Sequence {
     /// `..`, symbolic links leading out); refused by default
     #[cfg_attr(feature = "cli", arg(long))]
     pub allow_outside_paths: bool,
+    /// Light from where rays meet no geometry: `sky` (a uniform radiance of 1 W/m^2/sr: an
+    /// unoccluded white surface under it is 1), a .hdr or .exr equirectangular map (+Y up,
+    /// the centre column toward -Z), or `none`
+    /// [default: none, or sky for a scene that nothing else lights (with a note)]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "sky|none|FILE"))]
+    pub environment: Option<EnvironmentChoice>,
 }
 
 impl Default for Sequence {
@@ -268,6 +340,7 @@ impl Default for Sequence {
             seed: 1,
             camera: None,
             allow_outside_paths: false,
+            environment: None,
         }
     }
 }
@@ -285,6 +358,17 @@ impl Sequence {
         let mut scene = load_scene_with(self.scene_or(default), &self.load_options())?;
         if let Some(c) = &self.camera {
             c.apply(&mut scene)?;
+        }
+        match &self.environment {
+            Some(e) => e.apply(&mut scene)?,
+            None => {
+                if let Some(why) = &scene.unlit {
+                    eprintln!(
+                        "note: {why}: lit by the default environment, a uniform sky of radiance {} (--environment chooses another, --environment none refuses the scene)",
+                        crate::scene::environment::SKY_RADIANCE
+                    );
+                }
+            }
         }
         Ok(scene)
     }

@@ -81,7 +81,9 @@ pub fn lit_boxes(frame: &Frame, samples: &[EmitterSample]) -> Vec<(Vec3, Vec3)> 
 /// directional light and for a spot whose cone fits the front face, else five.
 pub fn faces(s: &EmitterSample) -> usize {
     match s.kind {
-        SampleKind::Directional { .. } | SampleKind::PointCone { .. } => 1,
+        SampleKind::Directional { .. }
+        | SampleKind::Environment { .. }
+        | SampleKind::PointCone { .. } => 1,
         // The front face holds every direction within 45 degrees of the axis.
         SampleKind::Spot { cos_outer, .. } if cos_outer >= std::f32::consts::FRAC_1_SQRT_2 => 1,
         _ => 5,
@@ -432,6 +434,7 @@ impl ShadowMaps {
             // A punctual light may lie far outside the geometry: its maps reach past it.
             let (near, far, ortho) = match s.kind {
                 SampleKind::Directional { extent } => (0.0, 2.0 * extent, extent),
+                SampleKind::Environment { extent } => (0.0, s.reach, extent),
                 _ => (near, far.max(s.reach * 1.01), 0.0),
             };
             for (k, (r, u, f), viewport) in drawn_faces(s, lit[j], self.size) {

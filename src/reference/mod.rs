@@ -1,8 +1,10 @@
 //! The reference: a CPU path tracer with next-event estimation and multiple importance
 //! sampling (power heuristic) on the emitter triangles, next-event estimation alone on the
 //! punctual lights (all of them at each vertex, or one picked by power when there are many: a
-//! delta light cannot be hit by a scattered ray, so it needs no MIS weight), Russian roulette,
-//! rayon across rows.
+//! delta light cannot be hit by a scattered ray, so it needs no MIS weight), next-event
+//! estimation with MIS on the environment (a direction from its distribution, weighed by the
+//! power heuristic against the cosine-sampled ray that misses the geometry; a camera ray that
+//! misses sees it), Russian roulette, rayon across rows.
 //! It is the ground truth every metric is held to.
 
 pub mod twin;
@@ -116,7 +118,23 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
     let mut d = dir;
     let mut pdf_bsdf = 0.0f32; // pdf of the direction that reached this vertex (0: camera ray)
     let mut depth = 0;
-    while let Some(h) = tracer.intersect(o, d, f32::INFINITY) {
+    let env = frame.emitters.environment.as_deref();
+    loop {
+        let Some(h) = tracer.intersect(o, d, f32::INFINITY) else {
+            // Out to the environment: all of it for a camera ray, else its MIS weight
+            // against the environment's own sampling.
+            if let Some(env) = env {
+                let le = env.radiance(d);
+                l += beta
+                    * le
+                    * if pdf_bsdf == 0.0 {
+                        1.0
+                    } else {
+                        power_heuristic(pdf_bsdf, env.pdf(d))
+                    };
+            }
+            break;
+        };
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
@@ -165,6 +183,16 @@ pub fn radiance(frame: &Frame, tracer: &Tracer, origin: Vec3, dir: Vec3, r: &mut
         } else {
             let (i, p) = em.pick_light(r.random());
             l += punctual(i, 1.0 / p);
+        }
+        // Next-event estimation on the environment: a direction from its distribution, with
+        // a shadow ray to past the sphere around the geometry.
+        if let Some(env) = env {
+            let (wi, le, pe) = env.sample(Vec2::new(r.random(), r.random()));
+            let cos_x = n.dot(wi);
+            if cos_x > 0.0 && pe > 0.0 && !tracer.occluded(x, n, x + wi * em.far(), Vec3::ZERO) {
+                let mis = power_heuristic(pe, cos_x / PI);
+                l += beta * rho / PI * le * (cos_x / pe * mis);
+            }
         }
         // Continue by cosine sampling: f cos / pdf = rho.
         d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));

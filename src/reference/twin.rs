@@ -127,17 +127,13 @@ pub fn direct_relative_error(
     samples: &[EmitterSample],
     counts: &[u32],
 ) -> Vec<f32> {
-    use crate::scene::SampleKind;
     let lum = |l: &EmitterSample, s: &SurfacePoint, rho: Vec3| match l.irradiance_at(s.x, s.n) {
         Some((e, y, ny)) if !tracer.occluded(s.x, s.n, y, ny) => {
             crate::math::luminance(e * rho) as f64
         }
         _ => 0.0,
     };
-    let area: Vec<&EmitterSample> = samples
-        .iter()
-        .filter(|l| l.kind == SampleKind::Area)
-        .collect();
+    let area: Vec<&EmitterSample> = samples.iter().filter(|l| l.kind.is_sampled()).collect();
     let m = area.len();
     let zero = || (vec![0.0f64; counts.len()], 0.0f64);
     let (var, mean2) = points
@@ -147,7 +143,7 @@ pub fn direct_relative_error(
             let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
             let exact: f64 = samples
                 .iter()
-                .filter(|l| l.kind != SampleKind::Area)
+                .filter(|l| !l.kind.is_sampled())
                 .map(|l| lum(l, s, rho))
                 .sum();
             // Each area sample's one-sample estimate of the area emitters' reflected light.

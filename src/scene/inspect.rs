@@ -65,6 +65,10 @@ pub struct Inspection {
     pub instances: (usize, usize, usize),
     pub emitters: Vec<EmitterInfo>,
     pub lights: Vec<LightInfo>,
+    /// The environment (its name, `sky` or a map's path, and its RGB power through the
+    /// sphere around the geometry, W), and whether the loader gave it because nothing in
+    /// the file lights the scene.
+    pub environment: Option<(String, Vec3, bool)>,
     pub cameras: Vec<CameraInfo>,
     /// The camera irad renders from at t = 0.
     pub camera: Camera,
@@ -135,6 +139,11 @@ pub fn inspect(scene: &Scene) -> Inspection {
         ),
         emitters,
         lights,
+        environment: f
+            .emitters
+            .environment
+            .as_ref()
+            .map(|e| (e.name.clone(), f.emitters.env_power, scene.unlit.is_some())),
         cameras,
         camera: f.camera,
         channels: scene.channels.len(),
@@ -253,6 +262,14 @@ impl fmt::Display for Inspection {
                 v(l.intensity),
                 v(l.power)
             )?;
+        }
+        if let Some((name, power, default)) = &self.environment {
+            let why = if *default {
+                " (the default: nothing in the file lights the scene)"
+            } else {
+                ""
+            };
+            writeln!(w, "  environment {name}{why}, power {} W", v(*power))?;
         }
         for c in &self.cameras {
             let used = if c.in_use { " (in use)" } else { "" };

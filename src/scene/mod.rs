@@ -6,6 +6,7 @@ pub mod anim;
 pub mod builtin;
 pub mod camera;
 pub mod culling;
+pub mod environment;
 pub mod framing;
 pub mod inspect;
 pub mod lights;
@@ -22,6 +23,7 @@ pub const MAX_COORD: f32 = 1e9;
 
 pub use anim::{Channel, Interpolation, Property};
 pub use camera::Camera;
+pub use environment::Environment;
 pub use lights::{LightDef, LightKind, PunctualLight};
 pub use samples::{EmitterSample, SampleKind};
 pub use texture::{TexRef, Texture};
@@ -162,6 +164,12 @@ pub struct Scene {
     /// A translation above every root: moves a scene that lies far from the origin back to
     /// it (zero for most scenes).
     pub shift: Vec3,
+    /// The radiance from where rays meet no geometry (None: black). The loader puts the
+    /// default sky here when nothing else lights the scene; `--environment` chooses.
+    pub environment: Option<Arc<Environment>>,
+    /// Why the file alone lights nothing (no emitter, no punctual light), when so: the
+    /// loader then gave it the default sky, and this is the note saying so.
+    pub unlit: Option<String>,
 }
 
 /// What lights a frame: emissive triangles, with a CDF for choosing one in proportion to
@@ -185,6 +193,10 @@ pub struct Emitters {
     /// The sphere around the frame's geometry (centre, radius): where a directional light's
     /// light comes in through.
     pub sphere: (Vec3, f32),
+    /// The environment, if any (see [`Scene::environment`]).
+    pub environment: Option<Arc<Environment>>,
+    /// The environment's RGB power into `sphere` ([`Environment::power`]).
+    pub env_power: Vec3,
 }
 
 impl Emitters {
@@ -213,7 +225,24 @@ impl Emitters {
 
     /// Whether anything lights the frame.
     pub fn is_empty(&self) -> bool {
-        self.tris.is_empty() && self.lights.is_empty()
+        self.tris.is_empty() && self.lights.is_empty() && self.environment.is_none()
+    }
+
+    /// The probability that a light path starts at the environment: its share of the
+    /// luminance power of everything that lights the frame (0 without one).
+    pub fn environment_share(&self) -> f32 {
+        if self.environment.is_none() {
+            return 0.0;
+        }
+        let e = crate::math::luminance(self.env_power);
+        let rest = crate::math::luminance(self.total_power + self.light_power);
+        if self.tris.is_empty() && self.lights.is_empty() {
+            1.0
+        } else if e + rest > 0.0 {
+            e / (e + rest)
+        } else {
+            0.0
+        }
     }
 
     /// The probability that a light path starts on an emitter triangle rather than at a
@@ -747,6 +776,10 @@ impl Scene {
             ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
         };
         self.place_lights(&world, &mut emitters);
+        if let Some(env) = &self.environment {
+            emitters.env_power = env.power(emitters.sphere.1);
+            emitters.environment = Some(env.clone());
+        }
         frame.emitters = emitters;
         frame
     }

@@ -41,6 +41,20 @@ pub enum SampleKind {
     /// `position` is the centre of a square `2 extent` wide facing it behind the geometry
     /// (its shadow map's).
     Directional { extent: f32 },
+    /// A direction drawn from the environment, drawn as a directional light: irradiance
+    /// `radiance` (`L(w) / (pdf(w) count)`, W/m^2) travelling along `normal`. `position` is the
+    /// centre of a square `2 extent` wide facing it behind the geometry, fitted to the
+    /// geometry's box (not its sphere), and the map's depth range is `reach`.
+    Environment { extent: f32 },
+}
+
+impl SampleKind {
+    /// Whether the sample is one of a stratified draw whose count sets its variance (a point
+    /// on an emitter triangle or a direction of the environment), rather than a punctual
+    /// light taken exactly.
+    pub fn is_sampled(&self) -> bool {
+        matches!(self, SampleKind::Area | SampleKind::Environment { .. })
+    }
 }
 
 impl EmitterSample {
@@ -48,7 +62,7 @@ impl EmitterSample {
     /// visibility (direct radiance is `rho/pi` times the sum of these over the samples that
     /// see `x`), with the point and normal whose visibility from `x` counts. None: no light.
     pub fn irradiance_at(&self, x: Vec3, n: Vec3) -> Option<(Vec3, Vec3, Vec3)> {
-        if let SampleKind::Directional { .. } = self.kind {
+        if let SampleKind::Directional { .. } | SampleKind::Environment { .. } = self.kind {
             let cos_x = -n.dot(self.normal);
             let back = x - self.normal * self.normal.dot(x - self.position);
             return (cos_x > 0.0).then(|| (self.radiance * cos_x, back, Vec3::ZERO));
@@ -78,10 +92,31 @@ impl EmitterSample {
                 .falloff(cos_l),
                 Vec3::ZERO,
             ),
-            SampleKind::Directional { .. } => unreachable!(),
+            SampleKind::Directional { .. } | SampleKind::Environment { .. } => unreachable!(),
         };
         (f > 0.0).then(|| (self.radiance * (f * cos_x / d2), self.position, nl))
     }
+}
+
+/// The orthographic shadow map along unit direction `n` that holds the box of `corners`:
+/// the centre of its square (behind the box along `n`, at the middle of the box's projection
+/// across), its half-width (the larger of the projection's two, 1% wider) and its depth range.
+/// Narrower than the sphere around the box, so its texels are finer (by up to `sqrt 3` for a
+/// cube seen along an axis).
+fn fit_map(n: Vec3, corners: &[Vec3]) -> (Vec3, f32, f32) {
+    let (t, b) = crate::math::basis(n);
+    let range = |a: Vec3| {
+        corners
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(a.dot(*c)), hi.max(a.dot(*c)))
+            })
+    };
+    let ((t0, t1), (b0, b1), (n0, n1)) = (range(t), range(b), range(n));
+    let half = (0.5 * (t1 - t0)).max(0.5 * (b1 - b0)).max(1e-6) * 1.01;
+    let margin = 0.01 * half + 0.005 * (n1 - n0);
+    let position = t * (0.5 * (t0 + t1)) + b * (0.5 * (b0 + b1)) + n * (n0 - margin);
+    (position, half, (n1 - n0) + 2.0 * margin)
 }
 
 impl Frame {
@@ -95,7 +130,16 @@ impl Frame {
         let em = &self.emitters;
         let mut out = self.punctual_samples(seed, count);
         let count = count - out.len();
+        // The environment takes the rest, or half of it when emitter triangles share it.
+        let env = match (&em.environment, em.tris.is_empty()) {
+            (None, _) => 0,
+            (Some(_), true) => count,
+            (Some(_), false) => (count / 2).max(count.min(1)),
+        };
+        let count = count - env;
+        let env_samples = self.environment_samples(seed, env);
         if em.tris.is_empty() || count == 0 {
+            out.extend(env_samples);
             return out;
         }
         let mut r = crate::math::rng(&[seed, 0xd1ec7]);
@@ -114,7 +158,50 @@ impl Frame {
                 tri: Some(tri as u32),
             }
         }));
+        out.extend(env_samples);
         out
+    }
+
+    /// `count` directions from the environment's distribution, each a directional light of
+    /// irradiance `L / (pdf count)`: stratified in the first of the two numbers (bands of
+    /// latitude in the map's distribution, so consecutive samples are strata), a golden-ratio
+    /// sequence in the second (docs/math.md, "The environment").
+    fn environment_samples(&self, seed: u64, count: usize) -> Vec<EmitterSample> {
+        use rand::Rng;
+        let em = &self.emitters;
+        let Some(env) = em.environment.as_deref().filter(|_| count > 0) else {
+            return Vec::new();
+        };
+        let mut r = crate::math::rng(&[seed, 0xe4f1]);
+        let shift: f32 = r.random();
+        let (lo, hi) = self.bounds();
+        let corners: Vec<Vec3> = (0..8)
+            .map(|k| {
+                Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        (0..count)
+            .filter_map(|j| {
+                let u = glam::Vec2::new(
+                    ((j as f32 + r.random::<f32>()) / count as f32).min(1.0 - 1e-7),
+                    (shift + j as f32 * 0.618_034).fract(),
+                );
+                let (w, le, p) = env.sample(u);
+                let (position, extent, reach) = fit_map(-w, &corners);
+                (p > 0.0).then(|| EmitterSample {
+                    position,
+                    normal: -w,
+                    radiance: le / (p * count as f32),
+                    kind: SampleKind::Environment { extent },
+                    reach,
+                    tri: None,
+                })
+            })
+            .collect()
     }
 
     /// The punctual lights' samples of [`Frame::emitter_samples`] (at most `count`).
@@ -133,8 +220,10 @@ impl Frame {
         };
         let needed: usize = em.lights.iter().map(slots).sum();
         let has_area = !em.tris.is_empty();
+        // One slot at least for the emitter triangles and one for the environment, if any.
+        let reserve = has_area as usize + em.environment.is_some() as usize;
         let mut out = Vec::new();
-        if needed + has_area as usize <= count {
+        if needed + reserve <= count {
             for l in &em.lights {
                 self.push_light(&mut out, l, 1.0, None);
             }
@@ -144,7 +233,7 @@ impl Frame {
         let share = 1.0 - em.area_share();
         // (With a single sample for both kinds the lights take it: `Pipeline::new` refuses
         // that count, so this only keeps any other caller from a panic.)
-        let most = count.saturating_sub(has_area as usize).max(1);
+        let most = count.saturating_sub(reserve).max(1);
         let budget = ((count as f32 * share).round() as usize).clamp(1, most);
         let k = (budget / 2).max(1);
         let mut r = crate::math::rng(&[seed, 0x9c7a1]);

@@ -49,8 +49,18 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     }
     let mut r = rng(&[seed, path, 0x11a7]);
     let u: f32 = r.random();
+    // From the environment first, in proportion to its power (`vpl::environment`).
+    let env = em.environment_share();
+    let u = if env > 0.0 && u < env {
+        -1.0
+    } else {
+        (u - env) / (1.0 - env)
+    };
     let share = em.area_share();
-    let (mut origin, mut dir, mut power) = if u < share {
+    let (mut origin, mut dir, mut power) = if u < 0.0 {
+        let (o, d, power) = super::environment::emit(em, &mut r);
+        (o, d, power / env)
+    } else if u < share {
         let (e, p_e) = em.pick(u / share);
         let tri = em.tris[e] as usize;
         let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
@@ -59,13 +69,13 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let dir = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
         // Le * cos / (p_e / A * cos / pi)
         let power = frame.emission_at(tri, b.x, b.y)
-            * (std::f32::consts::PI * frame.areas[tri] / (p_e * share));
+            * (std::f32::consts::PI * frame.areas[tri] / (p_e * share * (1.0 - env)));
         (tracer.offset(x, n, dir), dir, power)
     } else {
         let v = ((u - share) / (1.0 - share)).min(1.0 - 1e-7);
         let (i, p) = em.pick_light(v);
         let (o, d, power) = emit(&em.lights[i], em.sphere, &mut r);
-        (o, d, power / (p * (1.0 - share)))
+        (o, d, power / (p * (1.0 - share) * (1.0 - env)))
     };
     if power == Vec3::ZERO {
         return out;

@@ -6,5 +6,6 @@
 mod common;
 
 mod cli;
+mod environment;
 mod report;
 mod runs;

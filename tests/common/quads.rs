@@ -273,3 +273,33 @@ pub fn cornell_like(scale: f32, offset: [f32; 3]) -> Value {
     let scale = [scale; 3];
     q.finish_under(json!({ "scale": scale, "translation": offset }))
 }
+
+/// A model without any light, as most downloaded models: a grey floor (4 x 4 at y = 0,
+/// double-sided, albedo 0.6), a white cube (0.8) and a taller dark box (0.4) on it, and a
+/// panel (0.7) leaning over them; the camera at (0, 1, 4) looking down -z, so that the top
+/// of the frame sees the sky. Returns the document.
+pub fn lightless_model() -> Value {
+    let mut q = Quads::default();
+    let floor = q.material(0.6, 0.0, true);
+    let white = q.material(0.8, 0.0, false);
+    let dark = q.material(0.4, 0.0, false);
+    let panel = q.material(0.7, 0.0, true);
+    q.quad(
+        [0.; 3],
+        [0., 0., 2.],
+        [2., 0., 0.],
+        floor,
+        json!({ "name": "floor" }),
+    );
+    q.cube([-1.0, 0.0, -0.6], [-0.2, 0.8, 0.2], white);
+    q.cube([0.3, 0.0, -1.2], [0.9, 1.6, -0.6], dark);
+    q.quad(
+        [0.2, 1.2, -0.2],
+        [0.6, 0.0, 0.0],
+        [0.0, 0.3, -0.4],
+        panel,
+        json!({ "name": "panel" }),
+    );
+    q.camera([0.0, 1.0, 4.0], 0.8);
+    q.finish()
+}

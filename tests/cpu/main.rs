@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod environment;
 mod helpers;
 mod hostile;
 mod lights_expected;

@@ -324,11 +324,16 @@ fn no_emitter() {
     for m in v["materials"].as_array_mut().unwrap() {
         m.as_object_mut().unwrap().remove("emissiveFactor");
     }
-    let e = load_json(&v).unwrap_err();
+    // Loaded under the default sky, with the reason kept for the note (and for
+    // `--environment none`, which refuses it).
+    let s = load_json(&v).unwrap();
+    let e = s.unlit.clone().unwrap();
     assert!(
         e.contains("no emitter") && e.contains("nothing to light"),
         "{e}"
     );
+    assert!(s.environment.as_ref().is_some_and(|e| e.is_uniform()));
+    assert!(!s.at(0.0).emitters.is_empty());
 }
 
 #[test]

@@ -7,6 +7,7 @@
 mod common;
 
 mod compensation;
+mod environment;
 mod gpu;
 mod gpu_aa;
 mod gpu_passes;

@@ -399,11 +399,14 @@ fn units_warnings_and_refusals() {
         &|d| d["nodes"][1]["translation"] = json!([0.0, 1e12, 0.0]),
         &["light 0 ('bulb') lies at", "beyond irad's coordinate limit"],
     );
-    // A light on no node under the roots lights nothing: the file is refused as unlit.
-    refused(
-        &|d| d["scenes"][0]["nodes"] = json!([0]),
-        &["no emitter", "1 KHR_lights_punctual lights are on no node"],
-    );
+    // A light on no node under the roots lights nothing: the file is unlit, and lit by the
+    // default sky with a note saying why.
+    let mut d = base.clone();
+    d["scenes"][0]["nodes"] = json!([0]);
+    let why = load(&d).unwrap().unlit.unwrap();
+    for w in ["no emitter", "1 KHR_lights_punctual lights are on no node"] {
+        assert!(why.contains(w), "'{w}' missing from: {why}");
+    }
     // Spot cones outside the spec are clamped, with a warning.
     let mut d = base.clone();
     d["extensions"]["KHR_lights_punctual"]["lights"][0] =

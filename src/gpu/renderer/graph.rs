@@ -158,7 +158,7 @@ graph! {
             &sh.lights,
             b.view("hemicubes")?,
             (b.view("gbuffer")?, b.buffer("surface")?),
-            b.grid_pixels(),
+            (b.grid_pixels(), b.frame),
         );
         b.write("direct", &d.output)?;
         Ok(d)
@@ -170,10 +170,11 @@ graph! {
         when: "always",
         reads: &["gbuffer", "surface", "tris", "lights", "hemicubes"],
         writes: &["direct"],
-        what: "direct light per sub-sample from the emitter samples, with hemicube visibility",
+        what: "direct light per sub-sample from the emitter samples, with hemicube visibility; where no geometry is seen, the environment",
         runs: always,
-        encode: |r, enc, _| {
+        encode: |r, enc, f| {
             let (gw, gh) = r.config.grid();
+            r.passes.direct.upload_camera(&r.gpu, f.view_proj);
             r.passes.direct.encode(enc, gw, gh);
             Ok(())
         },

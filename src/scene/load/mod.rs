@@ -75,6 +75,33 @@ impl Ctx<'_> {
     }
 }
 
+/// The largest environment map file irad reads.
+pub const MAX_ENVIRONMENT_BYTES: u64 = 1 << 30;
+
+/// Reads an equirectangular environment map (.hdr or .exr) from `path`, wherever it is (the
+/// user named it); the error names the file and says what is wrong with it.
+pub fn read_environment(path: &Path) -> Result<super::Environment, String> {
+    let name = path.display().to_string();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext != "hdr" && ext != "exr" {
+        return Err(format!(
+            "{name} is not a .hdr or .exr file (an equirectangular radiance map)"
+        ));
+    }
+    let bytes =
+        files::read_regular(path, MAX_ENVIRONMENT_BYTES + 1).map_err(|e| format!("{name} {e}"))?;
+    if bytes.len() as u64 > MAX_ENVIRONMENT_BYTES {
+        return Err(format!(
+            "{name} is larger than {} GiB, irad's limit for an environment map",
+            MAX_ENVIRONMENT_BYTES >> 30
+        ));
+    }
+    super::Environment::decode(&name, &ext, &bytes)
+}
+
 /// Loads a scene from a file path with the default options (nothing read from outside the
 /// file's folder).
 pub fn load_path(path: &Path) -> Result<Scene, LoadError> {
@@ -156,6 +183,8 @@ pub fn load_slice_with(
         textures: Arc::new(textures),
         warnings: Vec::new(),
         shift: Vec3::ZERO,
+        environment: None,
+        unlit: None,
     };
     finish(cx, scene)
 }
@@ -275,12 +304,17 @@ fn finish(mut cx: Ctx, mut scene: Scene) -> Result<Scene, LoadError> {
     let frame = scene.at(0.0);
     let (lo, hi) = frame.bounds();
     scene.default_camera = Camera::framing(lo, hi);
+    dark_textures(&mut cx, &frame);
+    if let Some(why) = check_times(&cx, &scene)? {
+        // Lit by the default sky, as every viewer lights such a model (`--environment none`
+        // refuses it instead).
+        scene.environment = Some(Arc::new(crate::scene::Environment::sky()));
+        scene.unlit = Some(format!("{}: {why}", cx.file));
+    }
     if scene.camera_node.is_none() {
-        scene.default_camera = crate::scene::framing::lit_camera(&frame);
+        scene.default_camera = crate::scene::framing::lit_camera(&scene.at(0.0));
         cx.warn("no perspective camera: using one that frames what the lights light");
     }
-    dark_textures(&mut cx, &frame);
-    check_times(&cx, &scene)?;
     let file = cx.file;
     scene.warnings = cx
         .warnings
@@ -433,8 +467,8 @@ fn dark_textures(cx: &mut Ctx, frame: &crate::scene::Frame) {
 }
 
 /// At times spread over the animation: coordinates within [`MAX_COORD`], a usable camera,
-/// finite emitted power; and at one of them at least, an emitter.
-fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
+/// finite emitted power. When at none of them anything emits: Some(why).
+fn check_times(cx: &Ctx, scene: &Scene) -> Result<Option<String>, LoadError> {
     let d = scene.duration();
     let n = ((d * 10.0).ceil() as usize).min(CHECK_SAMPLES);
     let mut lit = false;
@@ -502,9 +536,9 @@ fn check_times(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
         } else {
             format!("; {}", dark.join("; "))
         };
-        return Err(cx.err(format!(
+        return Ok(Some(format!(
             "no emitter: no triangle has a material with emissiveFactor > 0 and no punctual light shines, so there is nothing to light the scene{lights}{dark}"
         )));
     }
-    Ok(())
+    Ok(None)
 }
