@@ -166,9 +166,21 @@ pub fn dir(cfg: &config::Compare, spec: &str) -> PathBuf {
         .camera
         .map(|c| format!("_camera{:016x}", fnv(c.to_string().as_bytes())))
         .unwrap_or_default();
+    // An --environment of its own: the same scene lit otherwise (a map by its bytes).
+    let environment = s
+        .environment
+        .as_ref()
+        .map(|e| {
+            let mut key = e.to_string().into_bytes();
+            if let crate::config::EnvironmentChoice::File(p) = e {
+                key.extend(std::fs::read(p).unwrap_or_default());
+            }
+            format!("_env{:016x}", fnv(&key))
+        })
+        .unwrap_or_default();
     let [a, b] = halves(cfg.spp);
     cfg.cache.join("reference").join(format!(
-        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}",
+        "{name}_{:016x}_{}_{}spp_{}fps_seed{}_halves{a}+{b}{camera}{environment}",
         source_hash(spec),
         s.size,
         cfg.spp,

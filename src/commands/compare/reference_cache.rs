@@ -172,6 +172,23 @@ mod tests {
         assert_ne!(with_camera(c1), dir_of("cornell", 256));
         assert_ne!(with_camera(c1), with_camera(c2));
         assert_eq!(with_camera(c1), with_camera(c1));
+        // Another --environment, another reference: sky, none, a map by its bytes.
+        let with_environment = |spec: &str| {
+            let mut c = config::Compare::default();
+            c.sequence.environment = Some(spec.parse().unwrap());
+            dir(&c, "cornell")
+        };
+        let map = a.join("sky.hdr");
+        std::fs::write(&map, "first").unwrap();
+        let m = map.to_str().unwrap();
+        let sky = with_environment("sky");
+        assert_ne!(sky, dir_of("cornell", 256));
+        assert_ne!(sky, with_environment("none"));
+        assert_eq!(sky, with_environment("sky"));
+        let first = with_environment(m);
+        assert_ne!(first, sky);
+        std::fs::write(&map, "second").unwrap();
+        assert_ne!(with_environment(m), first, "edited map");
         std::fs::remove_dir_all(&root).unwrap();
     }
 
