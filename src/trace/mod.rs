@@ -2,6 +2,7 @@
 //! with closest-hit and occlusion queries; rebuilt only when the geometry moved.
 
 pub mod edges;
+pub mod solids;
 
 use crate::scene::{Frame, Sides};
 use glam::{Vec3, Vec3A};
@@ -39,6 +40,9 @@ pub struct Tracer {
     cutouts: Option<Box<Frame>>,
     /// [`Frame::sides`]: which triangles are single-sided (None: none is).
     sides: Option<Vec<u8>>,
+    /// The closed meshes light paths cannot be inside ([`solids::Solids`]), for the frame's
+    /// camera (None: none).
+    solids: Option<solids::Solids>,
 }
 
 /// Which faces of single-sided triangles a ray passes through (see docs/math.md,
@@ -136,6 +140,7 @@ impl Tracer {
             k,
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
             sides: frame.sides(),
+            solids: solids::Solids::of(frame),
         }
     }
 
@@ -188,6 +193,8 @@ impl Tracer {
     /// still ones' too, without them). Returns whether it rebuilt.
     pub fn update(&mut self, frame: &Frame) -> bool {
         let start = std::time::Instant::now();
+        // Which solids hold the camera changes as it moves.
+        self.solids = solids::Solids::of(frame);
         if self.tris.len() != frame.tris.len() {
             return self.rebuild(frame);
         }
@@ -273,6 +280,19 @@ impl Tracer {
         self.sides
             .as_ref()
             .is_some_and(|s| s[tri as usize] != Sides::DOUBLE)
+    }
+
+    /// Whether a light path's ray along `dir` that strikes triangle `tri` comes from inside
+    /// a solid the camera is outside of ([`solids::Solids`]): nothing the frame shows sees it.
+    pub fn struck_inside_solid(&self, tri: u32, ng: Vec3, dir: Vec3) -> bool {
+        self.solids
+            .as_ref()
+            .is_some_and(|s| s.struck_from_inside(tri, ng, dir))
+    }
+
+    /// Whether emitting triangle `tri` shines into a solid the camera is outside of.
+    pub fn emits_inside_solid(&self, tri: u32) -> bool {
+        self.solids.as_ref().is_some_and(|s| s.emits_inside(tri))
     }
 
     fn intersect_facing(&self, origin: Vec3, dir: Vec3, tmax: f32, facing: Facing) -> Option<Hit> {

@@ -53,6 +53,10 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     let (mut origin, mut dir, mut power) = if u < share {
         let (e, p_e) = em.pick(u / share);
         let tri = em.tris[e] as usize;
+        // The inside of a closed lamp: its light reaches nothing outside (trace::solids).
+        if tracer.emits_inside_solid(tri as u32) {
+            return out;
+        }
         let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
         let n = frame.normals[tri];
         let x = frame.point(tri, b.x, b.y);
@@ -80,6 +84,11 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         // The back of a single-sided surface: those beyond it see its front, not this light,
         // and nobody sees its back (docs/math.md, "Single-sided surfaces").
         if ng.dot(dir) > 0.0 && tracer.single_sided(h.tri) {
+            break;
+        }
+        // Inside a closed mesh the camera is outside of: its light never gets out
+        // (trace::solids).
+        if tracer.struck_inside_solid(h.tri, ng, dir) {
             break;
         }
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
