@@ -252,6 +252,11 @@ impl Tracer {
         self.moving.ids.len()
     }
 
+    /// The scene's size: its bounding box's largest side (when it was last built).
+    pub fn size(&self) -> f32 {
+        self.eps * 1e4
+    }
+
     /// The offset used to move ray origins off surfaces.
     pub fn epsilon(&self) -> f32 {
         self.eps

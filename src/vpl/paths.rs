@@ -93,15 +93,18 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         }
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo_at(tri, h.b1, h.b2);
-        out.push(Vpl {
-            position: x,
-            normal: nf,
-            albedo,
-            power,
-            depth,
-            path,
-            tri: h.tri,
-        });
+        // A vertex in a crevice is kept by a coin (vpl::crevice); the path goes on either way.
+        if let Some(p) = super::crevice::keep(tracer, x, nf, (seed, path, depth)) {
+            out.push(Vpl {
+                position: x,
+                normal: nf,
+                albedo,
+                power: power / p,
+                depth,
+                path,
+                tri: h.tri,
+            });
+        }
         // Russian roulette on albedo.
         let q = albedo.max_element().min(0.99);
         if q <= 0.0 || r.random::<f32>() >= q {
