@@ -288,10 +288,10 @@ const TEST: &str = "thin_gap";
 fn the_gap_sweep_against_the_reference() {
     let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, 1);
     for (gap, double, e) in rows {
-        // Measured (seed 1; seed 2 in brackets): see the table in docs/math.md. The 1 cm
+        // Measured with seed 1: the table in docs/math.md (seed 2 within these too). The 1 cm
         // gap's reference is itself noisy (camera paths that find the gap: relMSE 0.19 between
-        // 1024 and 8192 samples a pixel) and the VPLs' mean is below it (-15%: the light the
-        // gap's mouth sends onto the ceiling next to it, see docs/math.md).
+        // 1024 and 8192 samples a pixel) and the VPLs' mean is below it (-15%: the camera sees into
+        // the gap's mouth, whose inside the clamped gather cannot light; see docs/math.md).
         let (mse, bias) = match (gap, double) {
             (g, _) if g >= 0.01 => (0.35, 0.20),
             (g, true) if g >= 1e-4 => (0.065, 0.13),
