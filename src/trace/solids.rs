@@ -23,7 +23,10 @@ impl Solids {
         let eye = frame.camera.position;
         let mut side = vec![0i8; frame.tris.len()];
         let mut any = false;
-        for i in frame.instances.iter().filter(|i| i.closed) {
+        // (An instance that names triangles the frame does not hold is left out.)
+        let count = frame.tris.len();
+        let held = |i: &&crate::scene::culling::Instance| i.tris.end as usize <= count;
+        for i in frame.instances.iter().filter(|i| i.closed).filter(held) {
             let around = eye.cmpge(i.lo).all() && eye.cmple(i.hi).all();
             if around && holds(frame, i.tris.clone(), eye) {
                 continue;
