@@ -33,6 +33,8 @@ pub struct Tracer {
     pub last_build_s: f64,
     /// Scale of the scene, for ray offsets: 1e-4 of its size.
     eps: f32,
+    /// The scene's size: its bounding box's largest side.
+    size: f32,
     /// The power of two the BVH's coordinates are the frame's times ([`scale_for`]).
     k: f32,
     /// The frame, kept when an alpha MASK can cut its triangles: a hit on a cut-away point
@@ -137,6 +139,7 @@ impl Tracer {
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
             eps: 1e-4 * if size > 0.0 { size } else { 1e-3 },
+            size: if size > 0.0 { size } else { 1e-3 },
             k,
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
             sides: frame.sides(),
@@ -254,7 +257,7 @@ impl Tracer {
 
     /// The scene's size: its bounding box's largest side (when it was last built).
     pub fn size(&self) -> f32 {
-        self.eps * 1e4
+        self.size
     }
 
     /// The offset used to move ray origins off surfaces.
