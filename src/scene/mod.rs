@@ -410,9 +410,18 @@ impl Frame {
     /// How each triangle is seen from behind, or None when every triangle is double-sided
     /// (see docs/math.md, "Single-sided surfaces"): [`Sides::DOUBLE`] for a double-sided
     /// material, [`Sides::SOLID`] for a single-sided one on a closed mesh, [`Sides::OPEN`]
-    /// for a single-sided one elsewhere.
+    /// for a single-sided one elsewhere; [`Sides::SOLID`] for the back-emitting twins of
+    /// double-sided emitters (`Scene::add_back_emitters`): from behind, their parent lies
+    /// 1e-4 of the scene in front of them, closer than the G-buffer's depth resolves (the
+    /// twin won the depth test on part of a lamp's face, which then showed its back: no
+    /// emission).
     pub fn sides(&self) -> Option<Vec<u8>> {
-        let single = |t: usize| !self.materials[self.tri_material[t] as usize].double_sided;
+        let twins = match self.instances.iter().map(|i| i.tris.end).max() {
+            Some(end) => end as usize,
+            None => self.tris.len(),
+        };
+        let single =
+            |t: usize| t >= twins || !self.materials[self.tri_material[t] as usize].double_sided;
         if !(0..self.tris.len()).any(single) {
             return None;
         }
@@ -431,6 +440,9 @@ impl Frame {
                     s[t as usize] = Sides::SOLID;
                 }
             }
+        }
+        for side in s.iter_mut().skip(twins) {
+            *side = Sides::SOLID;
         }
         Some(s)
     }

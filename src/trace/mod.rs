@@ -2,6 +2,7 @@
 //! with closest-hit and occlusion queries; rebuilt only when the geometry moved.
 
 pub mod edges;
+pub mod solids;
 
 use crate::scene::{Frame, Sides};
 use glam::{Vec3, Vec3A};
@@ -32,6 +33,8 @@ pub struct Tracer {
     pub last_build_s: f64,
     /// Scale of the scene, for ray offsets: 1e-4 of its size.
     eps: f32,
+    /// The scene's size: its bounding box's largest side.
+    size: f32,
     /// The power of two the BVH's coordinates are the frame's times ([`scale_for`]).
     k: f32,
     /// The frame, kept when an alpha MASK can cut its triangles: a hit on a cut-away point
@@ -39,6 +42,9 @@ pub struct Tracer {
     cutouts: Option<Box<Frame>>,
     /// [`Frame::sides`]: which triangles are single-sided (None: none is).
     sides: Option<Vec<u8>>,
+    /// The closed meshes light paths cannot be inside ([`solids::Solids`]), for the frame's
+    /// camera (None: none).
+    solids: Option<solids::Solids>,
 }
 
 /// Which faces of single-sided triangles a ray passes through (see docs/math.md,
@@ -133,9 +139,11 @@ impl Tracer {
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
             eps: 1e-4 * if size > 0.0 { size } else { 1e-3 },
+            size: if size > 0.0 { size } else { 1e-3 },
             k,
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
             sides: frame.sides(),
+            solids: solids::Solids::of(frame),
         }
     }
 
@@ -188,6 +196,8 @@ impl Tracer {
     /// still ones' too, without them). Returns whether it rebuilt.
     pub fn update(&mut self, frame: &Frame) -> bool {
         let start = std::time::Instant::now();
+        // Which solids hold the camera changes as it moves.
+        self.solids = solids::Solids::of(frame);
         if self.tris.len() != frame.tris.len() {
             return self.rebuild(frame);
         }
@@ -245,6 +255,11 @@ impl Tracer {
         self.moving.ids.len()
     }
 
+    /// The scene's size: its bounding box's largest side (when it was last built).
+    pub fn size(&self) -> f32 {
+        self.size
+    }
+
     /// The offset used to move ray origins off surfaces.
     pub fn epsilon(&self) -> f32 {
         self.eps
@@ -273,6 +288,19 @@ impl Tracer {
         self.sides
             .as_ref()
             .is_some_and(|s| s[tri as usize] != Sides::DOUBLE)
+    }
+
+    /// Whether a light path's ray along `dir` that strikes triangle `tri` comes from inside
+    /// a solid the camera is outside of ([`solids::Solids`]): nothing the frame shows sees it.
+    pub fn struck_inside_solid(&self, tri: u32, ng: Vec3, dir: Vec3) -> bool {
+        self.solids
+            .as_ref()
+            .is_some_and(|s| s.struck_from_inside(tri, ng, dir))
+    }
+
+    /// Whether emitting triangle `tri` shines into a solid the camera is outside of.
+    pub fn emits_inside_solid(&self, tri: u32) -> bool {
+        self.solids.as_ref().is_some_and(|s| s.emits_inside(tri))
     }
 
     fn intersect_facing(&self, origin: Vec3, dir: Vec3, tmax: f32, facing: Facing) -> Option<Hit> {

@@ -1,6 +1,7 @@
 //! Stages 4-6: virtual point lights. Light paths leave VPLs on diffuse surfaces; a sampler
 //! picks the frame's VPLs and their weights.
 
+pub mod crevice;
 pub mod environment;
 pub mod importance;
 pub mod ism_points;

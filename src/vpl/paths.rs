@@ -63,6 +63,10 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     } else if u < share {
         let (e, p_e) = em.pick(u / share);
         let tri = em.tris[e] as usize;
+        // The inside of a closed lamp: its light reaches nothing outside (trace::solids).
+        if tracer.emits_inside_solid(tri as u32) {
+            return out;
+        }
         let b = triangle_barycentrics(Vec2::new(r.random(), r.random()));
         let n = frame.normals[tri];
         let x = frame.point(tri, b.x, b.y);
@@ -92,17 +96,25 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         if ng.dot(dir) > 0.0 && tracer.single_sided(h.tri) {
             break;
         }
+        // Inside a closed mesh the camera is outside of: its light never gets out
+        // (trace::solids).
+        if tracer.struck_inside_solid(h.tri, ng, dir) {
+            break;
+        }
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo_at(tri, h.b1, h.b2);
-        out.push(Vpl {
-            position: x,
-            normal: nf,
-            albedo,
-            power,
-            depth,
-            path,
-            tri: h.tri,
-        });
+        // A vertex in a crevice is kept by a coin (vpl::crevice); the path goes on either way.
+        if let Some(p) = super::crevice::keep(tracer, x, nf, (seed, path, depth)) {
+            out.push(Vpl {
+                position: x,
+                normal: nf,
+                albedo,
+                power: power / p,
+                depth,
+                path,
+                tri: h.tri,
+            });
+        }
         // Russian roulette on albedo.
         let q = albedo.max_element().min(0.99);
         if q <= 0.0 || r.random::<f32>() >= q {

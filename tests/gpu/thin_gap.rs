@@ -12,6 +12,12 @@
 //! surfaces it sees along a grid of rays, each covering its cell of the tile
 //! (`gpu::ism::near_points`), and paths are no longer cut at 16 bounces, which had lost the
 //! light that leaves the gap late (0.58 of the reference with the ISM fixed).
+//!
+//! Issue 23 item 1 sweeps the gap (1 cm to touching, double- and single-sided): light paths
+//! no longer live inside closed meshes (the lamp's back-emitting twins shone into it, and an
+//! offset through a gap thinner than itself put paths inside the ceiling), and a vertex in a
+//! crevice keeps its VPL by a coin on how much of its lobe gets out (`vpl::crevice`); see
+//! docs/math.md, "Light that cannot get out".
 
 use crate::common;
 use base64::Engine;
@@ -71,8 +77,13 @@ impl Doc {
 /// The Blender-like Cornell box: room [-1,1]^3 open at +z, walls 2 cm thick, the light a
 /// 50 x 5 x 40 cm cube 1 cm under the ceiling (emission strength 10), a 60 x 80 x 60 cm box.
 fn blender_cornell() -> Value {
+    cornell_with_gap(0.01, true)
+}
+
+/// [`blender_cornell`] with the light's top `gap` under the ceiling's underside (0: touching)
+/// and every material double- or single-sided.
+fn cornell_with_gap(gap: f32, double_sided: bool) -> Value {
     let t = 0.02;
-    let gap = 0.01;
     let mut d = Doc::default();
     let (white, red, green, light) = (0, 1, 2, 3);
     d.cuboid(
@@ -98,6 +109,11 @@ fn blender_cornell() -> Value {
     );
     d.cuboid("box", [-0.3, -1., -0.3], [0.3, -0.2, 0.3], white);
     let mut nodes = d.nodes.clone();
+    let sides = |m: Value| {
+        let mut m = m;
+        m["doubleSided"] = json!(double_sided);
+        m
+    };
     nodes.push(json!({ "name": "camera", "camera": 0, "translation": [0.0, 0.0, 3.9] }));
     json!({
         "asset": { "version": "2.0" },
@@ -108,11 +124,11 @@ fn blender_cornell() -> Value {
         "meshes": d.meshes,
         "materials": [
             // Blender's white: no baseColorFactor, so glTF's default albedo 1.
-            { "name": "white", "pbrMetallicRoughness": { "metallicFactor": 0.0 } },
-            { "name": "red", "pbrMetallicRoughness": { "baseColorFactor": [0.57, 0.043, 0.044, 1.0], "metallicFactor": 0.0 } },
-            { "name": "green", "pbrMetallicRoughness": { "baseColorFactor": [0.105, 0.378, 0.076, 1.0], "metallicFactor": 0.0 } },
-            { "name": "light", "pbrMetallicRoughness": { "metallicFactor": 0.0 }, "emissiveFactor": [1.0, 1.0, 1.0],
-              "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 10.0 } } },
+            sides(json!({ "name": "white", "pbrMetallicRoughness": { "metallicFactor": 0.0 } })),
+            sides(json!({ "name": "red", "pbrMetallicRoughness": { "baseColorFactor": [0.57, 0.043, 0.044, 1.0], "metallicFactor": 0.0 } })),
+            sides(json!({ "name": "green", "pbrMetallicRoughness": { "baseColorFactor": [0.105, 0.378, 0.076, 1.0], "metallicFactor": 0.0 } })),
+            sides(json!({ "name": "light", "pbrMetallicRoughness": { "metallicFactor": 0.0 }, "emissiveFactor": [1.0, 1.0, 1.0],
+              "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 10.0 } } })),
         ],
         "cameras": [{ "type": "perspective", "perspective": { "yfov": 39.3f32.to_radians(), "znear": 0.1 } }],
         "accessors": d.accessors,
@@ -188,17 +204,169 @@ fn gpu_matches_the_reference_on_a_blender_style_cornell_box() {
         e.rel_mse
     );
     // Before: +28% mean and relMSE 2.96 (64x64, 256 VPLs); the image away from the light
-    // 2.2-3.5x the reference's.
-    // Measured: -2.84% mean and relMSE 0.576 (the reference at 1024 samples a pixel is noisy
-    // itself in an albedo-1 room); tolerances 1.5x those.
+    // 2.2-3.5x the reference's. At 386cd23: -3.4%, relMSE 0.59 (light paths inside the
+    // closed lamp leaking through the ISMs, by chance near the mean for seed 1: +115% to
+    // +6368% over seeds 1-3 at 32x32). Measured now: -15.5% and relMSE 0.220 (the VPLs' mean
+    // is below the reference's at a 1 cm gap: see the sweep below and docs/math.md, "Light
+    // that cannot get out"); tolerances about 1.3x those.
     let mut images = String::new();
-    if e.rel_bias.abs() >= 0.043 || e.rel_mse >= 0.86 {
+    if e.rel_bias.abs() >= 0.20 || e.rel_mse >= 0.30 {
         images = format!(
             " ({})",
             common::save_images("thin_gap", "blender-cornell", &g, &r)
         );
     }
-    assert!(e.rel_bias.abs() < 0.043, "mean {:+.3}{images}", e.rel_bias);
-    assert!(e.rel_mse < 0.86, "relMSE {}{images}", e.rel_mse);
+    assert!(e.rel_bias.abs() < 0.20, "mean {:+.3}{images}", e.rel_bias);
+    assert!(e.rel_mse < 0.30, "relMSE {}{images}", e.rel_mse);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The gaps of the sweep (metres; the room is 2 m wide): 1 cm, 1 mm, 0.1 mm, 0.01 mm, touching.
+const GAPS: [f32; 5] = [0.01, 0.001, 1e-4, 1e-5, 0.0];
+
+/// Frame 0 of `scene` at `size`^2 with 1024 VPLs of `sampler` (default settings otherwise, as
+/// `irad render` makes it), seed `seed`.
+fn gpu_frame(
+    scene: &irad::scene::Scene,
+    size: u32,
+    sampler: irad::vpl::sampler::SamplerKind,
+    seed: u64,
+) -> irad::image::Hdr {
+    let mut cfg = common::render_config();
+    cfg.sequence.size = irad::config::Size {
+        width: size,
+        height: size,
+    };
+    cfg.vpls = 1024;
+    cfg.sampler.kind = sampler;
+    cfg.sequence.seed = seed;
+    cfg.backend = common::backend();
+    let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(cfg.backend).unwrap());
+    let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
+    p.render_frame(0, true).unwrap().image.hdr
+}
+
+/// The sweep: every gap, double- and single-sided, the GPU frame against the reference
+/// (32 x 32, 1024 samples a pixel); prints the table and returns (gap, double, error).
+fn sweep(
+    sampler: irad::vpl::sampler::SamplerKind,
+    seed: u64,
+) -> Vec<(f32, bool, irad::metrics::FrameError)> {
+    let size = 32;
+    println!("gap sweep, {sampler:?} seed {seed}, 1024 VPLs, {size}x{size}, reference 1024 spp");
+    println!("| gap | sides | relMSE | bias |");
+    let mut rows = Vec::new();
+    for double in [true, false] {
+        for gap in GAPS {
+            let scene = common::quads::load(&cornell_with_gap(gap, double));
+            let g = gpu_frame(&scene, size, sampler, seed);
+            let r = common::reference_frame(&scene, size, 1024);
+            let e = irad::metrics::frame_error(&g, &r).unwrap();
+            let sides = if double { "double" } else { "single" };
+            println!(
+                "| {:>5.2} mm | {sides} | {:.4} | {:+.1}% |",
+                gap * 1e3,
+                e.rel_mse,
+                100.0 * e.rel_bias
+            );
+            if e.rel_mse > 0.2 || common::show_images() {
+                common::save_images(TEST, &format!("{}mm-{sides}", gap * 1e3), &g, &r);
+            }
+            rows.push((gap, double, e));
+        }
+    }
+    rows
+}
+
+const TEST: &str = "thin_gap";
+
+/// Issue 23 item 1: whatever the gap between a closed emissive slab and an albedo-1 ceiling,
+/// its VPLs light only what they see. Before (at 386cd23, 3 seeds): double-sided +80% to
+/// +18822% (light paths inside the closed lamp and, through offsets, inside the ceiling);
+/// single-sided 1 mm relMSE 3.46.
+#[test]
+fn the_gap_sweep_against_the_reference() {
+    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, 1);
+    for (gap, double, e) in rows {
+        // Measured with seed 1: the table in docs/math.md (seed 2 within these too). The 1 cm
+        // gap's reference is itself noisy (camera paths that find the gap: relMSE 0.19 between
+        // 1024 and 8192 samples a pixel) and the VPLs' mean is below it (-15%: the camera sees into
+        // the gap's mouth, whose inside the clamped gather cannot light; see docs/math.md).
+        let (mse, bias) = match (gap, double) {
+            (g, _) if g >= 0.01 => (0.35, 0.20),
+            (g, true) if g >= 1e-4 => (0.065, 0.13),
+            (_, true) => (0.045, 0.085),
+            (g, false) if g >= 0.001 => (0.08, 0.065),
+            _ => (0.04, 0.04),
+        };
+        assert!(
+            e.rel_mse <= mse && e.rel_bias.abs() <= bias,
+            "gap {gap} m, double-sided {double}: relMSE {:.4} (bound {mse}), bias {:+.3} (bound {bias})",
+            e.rel_mse,
+            e.rel_bias
+        );
+    }
+}
+
+/// The default sampler on the same sweep (a measurement: `--ignored`).
+#[test]
+#[ignore]
+fn the_gap_sweep_with_mh() {
+    sweep(irad::vpl::sampler::SamplerKind::Mh, 1);
+}
+
+/// Light paths end inside a closed mesh only when the camera is outside it: a room modelled
+/// as a closed box with its faces out (Blender's cube, scaled) and seen from inside keeps its
+/// light; seen from outside, no VPL is inside it. And no VPL of the sweep's double-sided lamp
+/// lies inside the lamp (its back-emitting twins shine into it).
+#[test]
+fn light_paths_live_in_a_closed_box_only_when_the_camera_is_inside() {
+    use irad::vpl::trace_paths;
+    let room = |camera_z: f32| {
+        let mut q = common::quads::Quads::default();
+        let grey = q.material(0.5, 0.0, true);
+        let light = q.material(0.0, 10.0, true);
+        q.cube([-1.0; 3], [1.0; 3], grey);
+        q.quad(
+            [0.0, 0.9, 0.0],
+            [0.2, 0.0, 0.0],
+            [0.0, 0.0, 0.2],
+            light,
+            json!({}),
+        );
+        q.camera([0.0, 0.0, camera_z], 1.0);
+        common::quads::load(&q.finish())
+    };
+    let inside_vpls = |scene: &irad::scene::Scene| {
+        let f = scene.at(0.0);
+        let t = irad::trace::Tracer::new(&f);
+        let v = trace_paths(&f, &t, 1, 0, 2000);
+        let inside = v
+            .iter()
+            .filter(|v| v.position.abs().max_element() <= 1.0 + 1e-4)
+            .count();
+        (v.len(), inside)
+    };
+    let (all, inside) = inside_vpls(&room(0.5));
+    assert!(
+        inside > 2000 && inside == all,
+        "camera inside: {inside} of {all} VPLs inside"
+    );
+    let (all, inside) = inside_vpls(&room(3.0));
+    assert_eq!((all, inside), (0, 0), "camera outside: VPLs inside the box");
+    let lamp = common::quads::load(&cornell_with_gap(0.01, true));
+    let f = lamp.at(0.0);
+    let t = irad::trace::Tracer::new(&f);
+    let v = trace_paths(&f, &t, 1, 0, 4000);
+    let in_lamp = v
+        .iter()
+        .filter(|v| {
+            let p = v.position;
+            p.x.abs() < 0.25 - 1e-4
+                && p.z.abs() < 0.2 - 1e-4
+                && p.y > 0.93 + 1e-4
+                && p.y < 0.99 - 1e-4
+        })
+        .count();
+    assert_eq!(in_lamp, 0, "{in_lamp} of {} VPLs inside the lamp", v.len());
 }

@@ -1,0 +1,66 @@
+//! Light paths in crevices (docs/math.md, "Light that cannot get out"): a vertex between two
+//! surfaces closer than the renderer can resolve (a lamp's top under the ceiling) sees almost
+//! nothing but the other surface, and a path there bounces hundreds of times before it leaves,
+//! leaving a VPL at every bounce. Those VPLs filled the frame's slots (1000 of 1024 VPLs from 28
+//! paths with a 1 mm gap) while lighting almost nothing the camera sees, and what they lit
+//! through their ISMs was mostly leaks.
+//!
+//! So a light path keeps the VPL of a vertex with a probability `p` (and divides its power by
+//! `p`), where `p` grows with how much of the vertex's cosine lobe reaches beyond its
+//! neighbourhood: [`RAYS`] stratified cosine-distributed rays, of which `open` reach farther
+//! than [`REACH`] of the scene's size, give `p = min(1, 4 open / RAYS)`. A vertex of which
+//! a quarter of the rays or more get out is always kept (almost every vertex of an open room);
+//! one of which no ray gets out is dropped: its light reaches less than about 1/RAYS of its
+//! lobe past its neighbourhood (the other surface of the crevice). The path goes on either way,
+//! so the light that leaves the crevice arrives as the VPLs of its later vertices. Unbiased
+//! for every vertex with a ray out (the coin's probability is divided out); the vertices with
+//! none lose what little their lobe's unseen part reaches.
+//!
+//! The rays and the coin draw from a stream of their own, seeded by (seed, path, depth): the
+//! path's own random numbers, so its later vertices, are those it had without this, and a
+//! path re-traced in another frame of a still scene keeps the same VPLs.
+
+use crate::math::{cosine_hemisphere, rng};
+use crate::trace::Tracer;
+use glam::{Vec2, Vec3};
+use rand::Rng;
+
+/// Rays a vertex casts to find how much of its lobe gets out of its neighbourhood.
+pub const RAYS: u32 = 16;
+
+/// The neighbourhood's radius, as a fraction of the scene's size (its bounding box's largest
+/// side): the default distance clamp's order (2% of the diagonal), within which the gather
+/// cannot tell one distance from another.
+pub const REACH: f32 = 0.02;
+
+/// The probability that the VPL at `x` (normal `n`, facing the side the light arrived from) of
+/// light path `path`, bounce `depth`, is kept, and the coin: Some(p) if kept.
+pub fn keep(
+    tracer: &Tracer,
+    x: Vec3,
+    n: Vec3,
+    (seed, path, depth): (u64, u64, u32),
+) -> Option<f32> {
+    let mut r = rng(&[seed, path, depth as u64, 0xc7e5]);
+    let reach = REACH * tracer.size();
+    let side = (RAYS as f32).sqrt() as u32;
+    let mut open = 0u32;
+    for i in 0..RAYS {
+        let u = Vec2::new(
+            ((i % side) as f32 + r.random::<f32>()) / side as f32,
+            ((i / side) as f32 + r.random::<f32>()) / side as f32,
+        );
+        let d = cosine_hemisphere(n, u);
+        if tracer
+            .intersect_light(tracer.offset(x, n, d), d, reach)
+            .is_none()
+        {
+            open += 1;
+            if 4 * open >= RAYS {
+                return Some(1.0);
+            }
+        }
+    }
+    let p = (4 * open) as f32 / RAYS as f32;
+    (p > 0.0 && r.random::<f32>() < p).then_some(p)
+}
