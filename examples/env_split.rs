@@ -37,16 +37,7 @@ fn main() -> anyhow::Result<()> {
     let pts = twin::pixel_points(&frame, &tr, w, h);
     let ind = twin::gather(&frame, &tr, &pts, w, h, &o.selection.shaded, p.params.clamp);
     let dir = twin::direct(&frame, &tr, &pts, w, h, &frame.emitter_samples(5, 4096));
-    let mean = |i: &Hdr| {
-        let v: Vec<f32> = i
-            .data
-            .iter()
-            .zip(&pts)
-            .filter(|(_, p)| p.is_some())
-            .map(|(c, _)| irad::math::luminance(*c))
-            .collect();
-        v.iter().sum::<f32>() / v.len().max(1) as f32
-    };
+    let mean = |i: &Hdr| twin::mean_over_surfaces(i, &pts);
     let (gd, gi) = (o.image.direct.unwrap(), o.image.indirect.unwrap());
     println!(
         "direct: GPU {:.4}, twin {:.4}; indirect: GPU {:.4}, twin {:.4}",

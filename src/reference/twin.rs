@@ -20,6 +20,20 @@ pub struct SurfacePoint {
     pub b: Vec2,
 }
 
+/// The mean luminance of `img` over the pixels whose centre sees a surface (`points` from
+/// [`pixel_points`]); 0 when none does.
+pub fn mean_over_surfaces(img: &Hdr, points: &[Option<SurfacePoint>]) -> f32 {
+    let (n, sum) = img
+        .data
+        .iter()
+        .zip(points)
+        .filter(|(_, p)| p.is_some())
+        .fold((0usize, 0.0f32), |(n, s), (c, _)| {
+            (n + 1, s + crate::math::luminance(*c))
+        });
+    sum / n.max(1) as f32
+}
+
 /// The surface seen through each pixel centre (None: nothing), row 0 at the top.
 pub fn pixel_points(
     frame: &Frame,

@@ -137,16 +137,7 @@ fn the_sky_does_not_leak_through_the_walls_of_a_room() {
     let tr = irad::trace::Tracer::new(&f);
     let pts = twin::pixel_points(&f, &tr, size, size);
     let exact = twin::direct(&f, &tr, &pts, size, size, &f.emitter_samples(5, 1024));
-    let mean = |img: &Hdr| {
-        let v: Vec<f32> = img
-            .data
-            .iter()
-            .zip(&pts)
-            .filter(|(_, p)| p.is_some())
-            .map(|(c, _)| irad::math::luminance(*c))
-            .collect();
-        v.iter().sum::<f32>() / v.len() as f32
-    };
+    let mean = |img: &Hdr| twin::mean_over_surfaces(img, &pts);
     let gpu_direct = o.image.direct.unwrap();
     let (g, t) = (mean(&gpu_direct), mean(&exact));
     println!("cornell-box under the sky: direct light GPU {g:.4}, twin {t:.4}");
