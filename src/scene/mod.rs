@@ -170,6 +170,88 @@ pub struct Scene {
     /// Why the file alone lights nothing (no emitter, no punctual light), when so: the
     /// loader then gave it the default sky, and this is the note saying so.
     pub unlit: Option<String>,
+    /// The triangles' mean emission where a texture or a cutout makes it vary, kept between
+    /// frames ([`EmissionMeans`]).
+    pub emission_means: EmissionMeans,
+}
+
+/// Lattice points in all for the mean emission of the triangles whose emission varies.
+pub const LATTICE_BUDGET: usize = 1 << 26;
+
+/// The side of the lattice each of `varying` triangles' mean emission is taken on: 32 (1024
+/// points) while that fits [`LATTICE_BUDGET`] (every scene up to 65,536 such triangles),
+/// fewer for more, at least 8.
+pub fn lattice_side(varying: usize) -> u32 {
+    let n = (LATTICE_BUDGET as f64 / varying.max(1) as f64)
+        .sqrt()
+        .floor();
+    (n as u32).clamp(8, 32)
+}
+
+/// Each triangle's mean emitted radiance where it varies over the triangle (an emissive
+/// texture, an alpha MASK): an average over a lattice of points, the same at every time
+/// (it depends on texture coordinates, vertex colours and materials, which do not move), so
+/// it is computed once and kept while a fingerprint of those inputs is unchanged. Clones of
+/// the scene share it (the fingerprint keeps a clone whose materials changed from using
+/// another's means).
+#[derive(Clone, Default)]
+pub struct EmissionMeans(Arc<std::sync::Mutex<Option<KeptMeans>>>);
+
+/// A fingerprint of what the means depend on, and the means.
+type KeptMeans = (u64, Arc<Vec<Vec3>>);
+
+impl std::fmt::Debug for EmissionMeans {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("EmissionMeans")
+    }
+}
+
+impl EmissionMeans {
+    /// The mean emission of every triangle of `frame` (computed in parallel on a miss).
+    fn of(&self, frame: &Frame) -> Arc<Vec<Vec3>> {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        frame.tri_material.hash(&mut h);
+        if let Some(a) = &frame.attrs {
+            let floats = |v: &[f32], h: &mut std::collections::hash_map::DefaultHasher| {
+                for x in v {
+                    x.to_bits().hash(h);
+                }
+            };
+            for (uv, c) in a.uv.iter().zip(&a.color) {
+                floats(&[uv[0][0].x, uv[0][0].y, uv[0][1].x, uv[0][1].y], &mut h);
+                floats(&[uv[0][2].x, uv[0][2].y, uv[1][0].x, uv[1][0].y], &mut h);
+                floats(&[uv[1][1].x, uv[1][1].y, uv[1][2].x, uv[1][2].y], &mut h);
+                for v in c {
+                    floats(&v.to_array(), &mut h);
+                }
+            }
+        }
+        format!("{:?}", frame.materials).hash(&mut h);
+        for t in frame.textures.iter() {
+            (&t.name, t.width, t.height, t.texels.len()).hash(&mut h);
+        }
+        let key = h.finish();
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((k, means)) = kept.as_ref() {
+            if *k == key && means.len() == frame.tris.len() {
+                return means.clone();
+            }
+        }
+        use rayon::prelude::*;
+        let varying = (0..frame.tris.len())
+            .filter(|&t| frame.emission_varies(t))
+            .count();
+        let n = lattice_side(varying);
+        let means: Arc<Vec<Vec3>> = Arc::new(
+            (0..frame.tris.len())
+                .into_par_iter()
+                .map(|i| frame.mean_emission(i, n))
+                .collect(),
+        );
+        *kept = Some((key, means.clone()));
+        means
+    }
 }
 
 /// What lights a frame: emissive triangles, with a CDF for choosing one in proportion to
@@ -381,21 +463,32 @@ impl Frame {
     }
 
     /// The mean emitted radiance over triangle `tri`: the factor, or with an emissive texture
-    /// or an alpha MASK its mean over a 32 x 32 stratified lattice of points of the triangle
-    /// (so that emitters are chosen by their power; the points sampled on them carry their own
-    /// radiance).
-    pub fn mean_emission(&self, tri: usize) -> Vec3 {
-        let m = &self.materials[self.tri_material[tri] as usize];
-        let varies = m.emissive_texture.is_some() || m.alpha_cutoff.is_some();
-        if !varies || self.attrs.is_none() || m.emission.max_element() <= 0.0 {
-            return m.emission;
+    /// or an alpha MASK its mean over an `n` x `n` stratified lattice of points of the
+    /// triangle (so that emitters are chosen by their power; the points sampled on them carry
+    /// their own radiance); `n` from [`lattice_side`].
+    pub fn mean_emission(&self, tri: usize, n: u32) -> Vec3 {
+        if !self.emission_varies(tri) {
+            return self.materials[self.tri_material[tri] as usize].emission;
         }
-        const N: u32 = 32;
+        self.lattice_mean(tri, n)
+    }
+
+    /// Whether triangle `tri`'s emission varies over it (an emissive texture or an alpha
+    /// MASK on an emitting material, with texture coordinates to read them by).
+    pub fn emission_varies(&self, tri: usize) -> bool {
+        let m = &self.materials[self.tri_material[tri] as usize];
+        (m.emissive_texture.is_some() || m.alpha_cutoff.is_some())
+            && self.attrs.is_some()
+            && m.emission.max_element() > 0.0
+    }
+
+    /// The mean emission over an `n` x `n` stratified lattice of points of triangle `tri`.
+    pub fn lattice_mean(&self, tri: usize, n: u32) -> Vec3 {
         let mut sum = Vec3::ZERO;
-        for i in 0..N {
-            for j in 0..N {
+        for i in 0..n {
+            for j in 0..n {
                 // The centre of cell (i, j) of the unit square, folded onto the triangle.
-                let (u, v) = ((i as f32 + 0.5) / N as f32, (j as f32 + 0.5) / N as f32);
+                let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
                 let (b1, b2) = if u + v > 1.0 {
                     (1.0 - u, 1.0 - v)
                 } else {
@@ -404,7 +497,7 @@ impl Frame {
                 sum += self.emission_at(tri, b1, b2);
             }
         }
-        sum / (N * N) as f32
+        sum / (n * n) as f32
     }
 
     /// How each triangle is seen from behind, or None when every triangle is double-sided
@@ -766,8 +859,19 @@ impl Scene {
         };
         let mut emitters = Emitters::default();
         let mut acc = 0.0f32;
+        // Where emission varies over triangles (textures, cutouts) their means are kept
+        // between frames; elsewhere each is its material's factor.
+        let varies = frame.attrs.is_some()
+            && frame.materials.iter().any(|m| {
+                m.emission.max_element() > 0.0
+                    && (m.emissive_texture.is_some() || m.alpha_cutoff.is_some())
+            });
+        let means = varies.then(|| self.emission_means.of(&frame));
         for i in 0..frame.tris.len() {
-            let le = frame.mean_emission(i);
+            let le = match &means {
+                Some(m) => m[i],
+                None => frame.materials[frame.tri_material[i] as usize].emission,
+            };
             if le.max_element() > 0.0 && frame.areas[i] > 0.0 {
                 let power = le * std::f32::consts::PI * frame.areas[i];
                 frame.emitter_of_tri[i] = emitters.tris.len() as u32;

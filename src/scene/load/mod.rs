@@ -185,6 +185,7 @@ pub fn load_slice_with(
         shift: Vec3::ZERO,
         environment: None,
         unlit: None,
+        emission_means: Default::default(),
     };
     finish(cx, scene)
 }
