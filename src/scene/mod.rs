@@ -232,12 +232,16 @@ impl EmissionMeans {
             (&t.name, t.width, t.height, t.texels.len()).hash(&mut h);
         }
         let key = h.finish();
-        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((k, means)) = kept.as_ref() {
-            if *k == key && means.len() == frame.tris.len() {
-                return means.clone();
+        {
+            let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+            if let Some((k, means)) = kept.as_ref() {
+                if *k == key && means.len() == frame.tris.len() {
+                    return means.clone();
+                }
             }
         }
+        // Computed without the lock held: a rayon worker that picks up another frame's
+        // evaluation while this one waits for its points never waits on itself.
         use rayon::prelude::*;
         let varying = (0..frame.tris.len())
             .filter(|&t| frame.emission_varies(t))
@@ -249,7 +253,7 @@ impl EmissionMeans {
                 .map(|i| frame.mean_emission(i, n))
                 .collect(),
         );
-        *kept = Some((key, means.clone()));
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, means.clone()));
         means
     }
 }
