@@ -5,6 +5,7 @@
 
 #![allow(dead_code)]
 
+pub mod gltf;
 pub mod quads;
 
 use irad::gpu::{adapters, BackendChoice};

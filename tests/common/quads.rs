@@ -18,13 +18,8 @@ pub struct Quads {
 
 impl Quads {
     fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, component: u32) -> usize {
-        self.views
-            .push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
-        self.bin.extend_from_slice(bytes);
-        self.accessors.push(json!({
-            "bufferView": self.views.len() - 1, "count": count, "type": ty, "componentType": component,
-        }));
-        self.accessors.len() - 1
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::accessor(b, v, a, (bytes, count, ty, component))
     }
 
     /// An accessor of floats (`ty`: "VEC3", "VEC4", ...).
@@ -65,15 +60,8 @@ impl Quads {
     ) -> usize {
         let at = |a: f32, b: f32| [0, 1, 2].map(|i| c[i] + a * u[i] + b * v[i]);
         let p = [at(-1., -1.), at(1., -1.), at(1., 1.), at(-1., 1.)];
-        let acc = self.accessor(bytemuck::cast_slice(p.as_flattened()), 4, "VEC3", 5126);
-        let lo = p
-            .iter()
-            .fold([f32::MAX; 3], |a, v| [0, 1, 2].map(|i| a[i].min(v[i])));
-        let hi = p
-            .iter()
-            .fold([f32::MIN; 3], |a, v| [0, 1, 2].map(|i| a[i].max(v[i])));
-        self.accessors[acc]["min"] = json!(lo);
-        self.accessors[acc]["max"] = json!(hi);
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        let acc = crate::common::gltf::positions(b, v, a, &p);
         let idx: [u32; 6] = [0, 1, 2, 0, 2, 3];
         let ind = self.accessor(bytemuck::cast_slice(&idx), 6, "SCALAR", 5125);
         self.meshes.push(json!({ "primitives": [

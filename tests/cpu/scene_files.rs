@@ -23,33 +23,15 @@ impl Gltf {
         ty: &str,
         component: u32,
     ) -> usize {
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
-        }
-        self.views
-            .push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
-        self.bin.extend_from_slice(bytes);
-        self.accessors.push(json!({
-            "bufferView": self.views.len() - 1, "count": count, "type": ty, "componentType": component,
-        }));
-        self.accessors.len() - 1
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::accessor(b, v, a, (bytes, count, ty, component))
     }
     pub(crate) fn floats(&mut self, v: &[f32], ty: &str, per: usize) -> usize {
         self.accessor(bytemuck::cast_slice(v), v.len() / per, ty, 5126)
     }
     pub(crate) fn positions(&mut self, p: &[[f32; 3]]) -> usize {
-        let acc = self.floats(p.as_flattened(), "VEC3", 3);
-        let (lo, hi) = p
-            .iter()
-            .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), v| {
-                (
-                    [lo[0].min(v[0]), lo[1].min(v[1]), lo[2].min(v[2])],
-                    [hi[0].max(v[0]), hi[1].max(v[1]), hi[2].max(v[2])],
-                )
-            });
-        self.accessors[acc]["min"] = json!(lo);
-        self.accessors[acc]["max"] = json!(hi);
-        acc
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::positions(b, v, a, p)
     }
     pub(crate) fn indices(&mut self, i: &[u32]) -> usize {
         self.accessor(bytemuck::cast_slice(i), i.len(), "SCALAR", 5125)

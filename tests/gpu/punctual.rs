@@ -21,30 +21,12 @@ struct Gltf {
 
 impl Gltf {
     fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, component: u32) -> usize {
-        self.views
-            .push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
-        self.bin.extend_from_slice(bytes);
-        self.accessors.push(json!({
-            "bufferView": self.views.len() - 1, "count": count, "type": ty, "componentType": component,
-        }));
-        self.accessors.len() - 1
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::accessor(b, v, a, (bytes, count, ty, component))
     }
     fn positions(&mut self, p: &[[f32; 3]]) -> usize {
-        let acc = self.accessor(
-            bytemuck::cast_slice(p.as_flattened()),
-            p.len(),
-            "VEC3",
-            5126,
-        );
-        let lo = p
-            .iter()
-            .fold([f32::MAX; 3], |a, v| [0, 1, 2].map(|i| a[i].min(v[i])));
-        let hi = p
-            .iter()
-            .fold([f32::MIN; 3], |a, v| [0, 1, 2].map(|i| a[i].max(v[i])));
-        self.accessors[acc]["min"] = json!(lo);
-        self.accessors[acc]["max"] = json!(hi);
-        acc
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::positions(b, v, a, p)
     }
     fn indices(&mut self, i: &[u32]) -> usize {
         self.accessor(bytemuck::cast_slice(i), i.len(), "SCALAR", 5125)

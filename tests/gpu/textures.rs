@@ -41,20 +41,11 @@ struct Gltf {
 
 impl Gltf {
     fn view(&mut self, bytes: &[u8]) -> usize {
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
-        }
-        self.views
-            .push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
-        self.bin.extend_from_slice(bytes);
-        self.views.len() - 1
+        crate::common::gltf::view(&mut self.bin, &mut self.views, bytes)
     }
     fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, component: u32) -> usize {
-        let v = self.view(bytes);
-        self.accessors.push(
-            json!({ "bufferView": v, "count": count, "type": ty, "componentType": component }),
-        );
-        self.accessors.len() - 1
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::accessor(b, v, a, (bytes, count, ty, component))
     }
     /// A quad: corners (counter-clockwise seen from its front), their UVs, optional COLOR_0
     /// (u8, normalized), with `material`.
@@ -65,15 +56,8 @@ impl Gltf {
         colors: Option<[[u8; 4]; 4]>,
         material: usize,
     ) -> Value {
-        let pos = self.accessor(bytemuck::cast_slice(p.as_flattened()), 4, "VEC3", 5126);
-        let lo = p
-            .iter()
-            .fold([f32::MAX; 3], |a, v| [0, 1, 2].map(|i| a[i].min(v[i])));
-        let hi = p
-            .iter()
-            .fold([f32::MIN; 3], |a, v| [0, 1, 2].map(|i| a[i].max(v[i])));
-        self.accessors[pos]["min"] = json!(lo);
-        self.accessors[pos]["max"] = json!(hi);
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        let pos = crate::common::gltf::positions(b, v, a, &p);
         let tc = self.accessor(bytemuck::cast_slice(uv.as_flattened()), 4, "VEC2", 5126);
         let ind = self.accessor(
             bytemuck::cast_slice(&[0u32, 1, 2, 0, 2, 3]),

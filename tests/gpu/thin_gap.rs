@@ -36,16 +36,8 @@ struct Doc {
 
 impl Doc {
     fn accessor(&mut self, bytes: &[u8], count: usize, ty: &str, component: u32) -> usize {
-        while !self.bin.len().is_multiple_of(4) {
-            self.bin.push(0);
-        }
-        self.views
-            .push(json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() }));
-        self.bin.extend_from_slice(bytes);
-        self.accessors.push(json!({
-            "bufferView": self.views.len() - 1, "count": count, "type": ty, "componentType": component,
-        }));
-        self.accessors.len() - 1
+        let (b, v, a) = (&mut self.bin, &mut self.views, &mut self.accessors);
+        crate::common::gltf::accessor(b, v, a, (bytes, count, ty, component))
     }
 
     /// An axis-aligned box from `lo` to `hi`, faces outward, as Blender writes a cube.
