@@ -44,6 +44,8 @@ pub struct Pipeline {
     pub renderer: Renderer,
     tracer: Tracer,
     sampler: Sampler,
+    /// The light's temporal gradient between frames (`--accumulate` with `--history gradient`).
+    gradient: crate::vpl::gradient::LightGradient,
 }
 
 impl Pipeline {
@@ -80,6 +82,7 @@ impl Pipeline {
             renderer,
             tracer,
             sampler,
+            gradient: Default::default(),
         })
     }
 
@@ -129,6 +132,15 @@ impl Pipeline {
             self.renderer.near_directions(),
         );
         lap(&mut stages, "ism_near", &mut t);
+        // The light's temporal gradient, for accumulation under a moving light or object.
+        let c = &self.renderer.config;
+        let gradient = if c.accumulate > 1 && c.history == crate::gpu::HistoryMode::Gradient {
+            self.gradient
+                .measure(&frame, &self.tracer, s.seed, (c.width, c.height), s.clamp)
+        } else {
+            None
+        };
+        lap(&mut stages, "gradient", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
         let image = self.renderer.render(
             &GpuFrame {
@@ -137,6 +149,7 @@ impl Pipeline {
                 emitter_samples: &lights,
                 clamp: s.clamp,
                 near: &near,
+                gradient: gradient.as_ref(),
             },
             components,
         )?;

@@ -200,6 +200,7 @@ pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
         edge_rays: q.edge_rays,
         compensate: q.compensate,
         accumulate: q.accumulate,
+        history: q.history,
         shadow_bias: 1.5,
         exposure: cfg.exposure,
         seed: cfg.sequence.seed,

@@ -2,6 +2,7 @@
 //! `validate()`; [`crate::resolve`] turns them (and the scene's budgets) into a
 //! [`super::RendererConfig`].
 
+pub use super::temporal::HistoryMode;
 use crate::check;
 use anyhow::{bail, Result};
 use serde::Serialize;
@@ -55,11 +56,14 @@ pub struct Quality {
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true))]
     pub compensate: u32,
     /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'
-    /// estimates of its surface point (reprojected; a disoccluded pixel starts anew), while
-    /// the triangles and emitter samples stay the same; a moving light or object starts it
-    /// anew everywhere (0 or 1: off, every frame stands alone)
+    /// estimates of its surface point (reprojected; a disoccluded pixel starts anew); under a
+    /// moving light or object --history says what becomes of it (0 or 1: off, every frame
+    /// stands alone)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().accumulate, allow_hyphen_values = true))]
     pub accumulate: u32,
+    /// What the accumulated history does under a moving light or object
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Quality::default().history))]
+    pub history: HistoryMode,
 }
 
 impl Default for Quality {
@@ -90,7 +94,12 @@ impl Default for Quality {
             // Off: it costs CPU time in proportion to the pixels near creases (`git show 38ba47d:README.md`,
             // "Clamping-bias compensation").
             compensate: 0,
-            accumulate: 0,
+            // 8 frames, the history weighed by the light's gradient under a moving light or
+            // object: on the built-in animations at 96x96 with 256 VPLs, mh's relMSE and warped
+            // flicker fall to 0.3-0.7x and 0.2-0.3x of plain cdf's
+            // (docs/results/default_sampler.md).
+            accumulate: 8,
+            history: HistoryMode::Gradient,
         }
     }
 }

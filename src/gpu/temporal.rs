@@ -1,9 +1,10 @@
 //! Temporal accumulation (`shaders/temporal.wgsl`, `--accumulate N`): the indirect light of
 //! a pixel is the running mean of up to N frames' estimates of its surface point, the
 //! earlier ones found by reprojecting the point into the last frame's image (bilinear over
-//! the samples on the same surface; a disoccluded pixel starts anew). It is used only while
-//! the triangles and emitter samples are the same bits as the last frame's, so that the light
-//! being estimated is the same and only the VPLs differ; the camera may move. With a sampler
+//! the samples on the same surface; a disoccluded pixel starts anew). While the triangles and
+//! emitter samples are the same bits as the last frame's, the light being estimated is the
+//! same and only the VPLs differ (the camera may move), so the history is used whole; when
+//! they changed, the light's temporal gradient (`vpl::gradient`) weighs it (`--history`). With a sampler
 //! that draws fresh VPLs each frame (uniform, cdf), a still view's indirect light after n
 //! frames is the mean of n independent estimates: n times fewer VPLs' variance. The history
 //! ping-pongs between two buffers (running mean and frame count, G-buffer sample), one pass
@@ -12,15 +13,18 @@
 use super::bindings::{bytes, gpu_struct, params, read, read_write, texture, Elem, Group, Pass};
 use super::common::{FrameConstants, Tri};
 use super::{Gpu, PixelPass};
+use crate::vpl::gradient::{Gradient, GRID};
 use glam::{Mat4, Vec2};
 
 gpu_struct! {
     /// The last frame's camera and the accumulation's settings.
     pub(crate) struct History {
         pub prev_view_proj: [[f32; 4]; 4],
-        /// Tile 0's sub-sample offset (x, y), the most frames averaged, whether the last
-        /// frame's history may be used (1) or not (0).
+        /// Tile 0's sub-sample offset (x, y), the most frames averaged, and how the last
+        /// frame's history is used ([`HistoryUse`] as a number).
         pub offset: [f32; 4],
+        /// The gradient grid's width and height (x, y).
+        pub grid: [f32; 4],
     }
 }
 
@@ -31,6 +35,43 @@ gpu_struct! {
         pub mean: [f32; 4],
         pub sample: [u32; 4],
     }
+}
+
+/// What the history does when the light or the objects moved (`--history`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum HistoryMode {
+    /// Weighed by the light's temporal gradient (`vpl::gradient`): kept where the light
+    /// hardly changed, dropped where it changed entirely
+    Gradient,
+    /// Dropped everywhere: every such frame starts anew
+    Drop,
+    /// Kept whole, whatever the change (lags behind it; for comparison)
+    Keep,
+}
+
+impl std::fmt::Display for HistoryMode {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            HistoryMode::Gradient => "gradient",
+            HistoryMode::Drop => "drop",
+            HistoryMode::Keep => "keep",
+        })
+    }
+}
+
+/// How a frame uses the last frame's history.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HistoryUse {
+    /// None: the first frame, a changed light with `--history drop`, or after a frame that
+    /// failed part-way.
+    None = 0,
+    /// As it is: the same triangles and emitter samples (so the same light), or `--history
+    /// keep`.
+    Whole = 1,
+    /// Weighed by the light's temporal gradient: the light or the objects moved.
+    Gradient = 2,
 }
 
 pub(crate) const PASS: Pass = Pass {
@@ -47,6 +88,7 @@ pub(crate) const PASS: Pass = Pass {
             read("hist_in", Elem::Struct(&HistorySample::LAYOUT)),
             read_write("output", Elem::Plain(16)),
             read_write("hist_out", Elem::Struct(&HistorySample::LAYOUT)),
+            read("gradient", Elem::Plain(4)),
         ],
     }],
 };
@@ -55,6 +97,8 @@ pub struct Temporal {
     /// Pass `k` reads history buffer `k` and writes buffer `1 - k`.
     passes: [PixelPass; 2],
     settings: wgpu::Buffer,
+    /// The light's relative change on the gradient grid (`vpl::gradient`).
+    gradient: wgpu::Buffer,
     /// The accumulated indirect light, in the layout of the pass's input.
     pub output: wgpu::Buffer,
     /// Which history buffer the next frame reads.
@@ -63,20 +107,21 @@ pub struct Temporal {
     last: Option<Mat4>,
     /// The most frames averaged.
     frames: u32,
+    /// What a changed light does to the history.
+    mode: HistoryMode,
 }
 
 impl Temporal {
     /// The pass over `current` (the gather's or interleave filter's output, indexed as the
     /// sub-sample grid) for the first `pixels` samples of the grid (the rows of tile 0),
-    /// averaging up to `frames` frames.
+    /// averaging up to `frames` frames, a changed light treated as `mode` says.
     pub fn new(
         gpu: &Gpu,
-        params: &wgpu::Buffer,
-        tris: &wgpu::Buffer,
+        (params, tris): (&wgpu::Buffer, &wgpu::Buffer),
         gbuf: &wgpu::TextureView,
         current: &wgpu::Buffer,
         pixels: u64,
-        frames: u32,
+        (frames, mode): (u32, HistoryMode),
     ) -> Self {
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let size = bytes::<[f32; 4]>(pixels);
@@ -86,6 +131,12 @@ impl Temporal {
         let settings = gpu.buffer(
             "history settings",
             std::mem::size_of::<History>() as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let cells = (GRID * GRID) as u64;
+        let gradient = gpu.buffer(
+            "light gradient",
+            bytes::<f32>(cells),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         );
         let passes = [0, 1].map(|k| {
@@ -101,32 +152,53 @@ impl Temporal {
                     ("hist_in", hist[k].as_entire_binding()),
                     ("output", output.as_entire_binding()),
                     ("hist_out", hist[1 - k].as_entire_binding()),
+                    ("gradient", gradient.as_entire_binding()),
                 ],
             )
         });
         Temporal {
             passes,
             settings,
+            gradient,
             output,
             parity: 0,
             last: None,
             frames,
+            mode,
         }
     }
 
-    /// Uploads this frame's settings: the last frame's camera, and whether its history holds
-    /// (`same_light`: triangles and emitter samples unchanged since it). `view_proj` is this
-    /// frame's, `offset` tile 0's sub-sample offset. Returns whether the history is used.
-    pub fn upload(&mut self, gpu: &Gpu, view_proj: Mat4, offset: Vec2, same_light: bool) -> bool {
-        let valid = same_light && self.last.is_some();
+    /// Uploads this frame's settings: the last frame's camera, and how its history is used:
+    /// whole when `same_light` (triangles and emitter samples unchanged since it), else as
+    /// the mode says, weighed by `gradient` (none: the light hardly changed is not known, so
+    /// the history is dropped). `view_proj` is this frame's, `offset` tile 0's sub-sample
+    /// offset.
+    pub fn upload(
+        &mut self,
+        gpu: &Gpu,
+        (view_proj, offset): (Mat4, Vec2),
+        same_light: bool,
+        gradient: Option<&Gradient>,
+    ) -> HistoryUse {
+        let using = match (self.last.is_some(), same_light, self.mode, gradient) {
+            (false, ..) => HistoryUse::None,
+            (true, true, ..) | (true, false, HistoryMode::Keep, _) => HistoryUse::Whole,
+            (true, false, HistoryMode::Gradient, Some(g)) if g.lambda.len() == GRID * GRID => {
+                gpu.queue
+                    .write_buffer(&self.gradient, 0, bytemuck::cast_slice(&g.lambda));
+                HistoryUse::Gradient
+            }
+            (true, false, ..) => HistoryUse::None,
+        };
         let h = History {
             prev_view_proj: self.last.unwrap_or(view_proj).to_cols_array_2d(),
-            offset: [offset.x, offset.y, self.frames as f32, valid as u32 as f32],
+            offset: [offset.x, offset.y, self.frames as f32, using as u32 as f32],
+            grid: [GRID as f32, GRID as f32, 0.0, 0.0],
         };
         gpu.queue
             .write_buffer(&self.settings, 0, bytemuck::bytes_of(&h));
         self.last = Some(view_proj);
-        valid
+        using
     }
 
     /// Drops the history: the next frame starts anew (after a frame that failed part-way).

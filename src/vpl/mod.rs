@@ -3,6 +3,7 @@
 
 pub mod crevice;
 pub mod environment;
+pub mod gradient;
 pub mod importance;
 pub mod ism_points;
 pub mod paths;

@@ -34,12 +34,14 @@ static QUIET_MESA: extern "C" fn() = {
 /// The backends to test: every one of Vulkan and GL that has a usable adapter here (looked
 /// up once a process).
 /// The render settings the GPU tests start from: the library's defaults with the `uniform`
-/// sampler (Keller's: fresh, independent VPLs every frame, no state between frames), which
-/// their tolerances were measured with. The library's default sampler is `mh`, whose chains
-/// carry state from frame to frame; tests of a sampler name it.
+/// sampler (Keller's: fresh, independent VPLs every frame, no state between frames) and no
+/// temporal accumulation, which their tolerances were measured with. The library's default
+/// sampler is `mh`, whose chains carry state from frame to frame, and it accumulates 8
+/// frames; tests of a sampler or of accumulation name them.
 pub fn render_config() -> irad::config::Render {
     let mut c = irad::config::Render::default();
     c.sampler.kind = irad::vpl::sampler::SamplerKind::Uniform;
+    c.quality.accumulate = 0;
     c
 }
 

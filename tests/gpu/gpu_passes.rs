@@ -257,6 +257,7 @@ fn indirect(
         emitter_samples: &[],
         clamp,
         near: &[],
+        gradient: None,
     };
     r.render(&input, true).unwrap().indirect.unwrap()
 }

@@ -300,12 +300,11 @@ graph! {
         )?;
         let t = Temporal::new(
             b.gpu,
-            &b.shared.params,
-            &b.shared.tris,
+            (&b.shared.params, &b.shared.tris),
             b.view("gbuffer")?,
             b.buffer("indirect")?,
             tile0,
-            c.accumulate,
+            (c.accumulate, c.history),
         );
         b.write("indirect", &t.output)?;
         Ok(Some(t))
@@ -315,9 +314,9 @@ graph! {
         tables: &[&crate::gpu::temporal::PASS],
         files: "`gpu/temporal.rs`, `shaders/temporal.wgsl`",
         when: "`--accumulate N > 1`",
-        reads: &["gbuffer", "tris", "indirect", "history"],
+        reads: &["gbuffer", "tris", "indirect", "history", "light gradient"],
         writes: &["indirect", "history"],
-        what: "the indirect light as the running mean of up to N frames' estimates of the pixel's surface point, while the triangles and emitter samples stay the same",
+        what: "the indirect light as the running mean of up to N frames' estimates of the pixel's surface point; under a moving light or object the history weighed by the light's temporal gradient (`--history`)",
         runs: |r| r.passes.temporal.is_some(),
         encode: |r, enc, _| {
             let (iw, ih) = r.indirect_size();
@@ -491,8 +490,16 @@ mod tests {
     #[test]
     fn every_read_is_written_before() {
         let uploaded = [
-            "vertices", "camera", "tris", "textures", "lights", "points", "vpls", "slots",
+            "vertices",
+            "camera",
+            "tris",
+            "textures",
+            "lights",
+            "points",
+            "vpls",
+            "slots",
             "history",
+            "light gradient",
         ];
         let mut written: Vec<&str> = uploaded.to_vec();
         let mut names = Vec::new();

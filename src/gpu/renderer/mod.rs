@@ -16,6 +16,7 @@ use super::bindings::bytes;
 use super::common::{FrameConstants, GpuEmitterSample, GpuVpl, Tri};
 use super::gbuffer::Vertex;
 use super::profile::{has_timestamps, read_mapped, Profiling, Recorder, Timestamps};
+use super::temporal::{HistoryMode, HistoryUse};
 use super::{ism, Gpu};
 use crate::image::Hdr;
 use crate::scene::{EmitterSample, Frame};
@@ -61,6 +62,8 @@ pub struct RendererConfig {
     /// Temporal accumulation: the indirect light averages up to this many frames while the
     /// light is the same (`temporal`; 0 or 1: off).
     pub accumulate: u32,
+    /// What the history does under a moving light or object (`temporal`).
+    pub history: HistoryMode,
     pub exposure: f32,
     /// Seeds the point set and the slots' subsets.
     pub seed: u64,
@@ -85,6 +88,9 @@ pub struct GpuFrame<'a> {
     /// The VPLs' near-field points ([`ism::near_points`] over [`Renderer::near_directions`],
     /// in slot order), or none (then the ISMs hold the point set alone).
     pub near: &'a [ism::Point],
+    /// The light's relative change since the last frame (`vpl::gradient`), for temporal
+    /// accumulation under a moving light or object (none: not measured).
+    pub gradient: Option<&'a crate::vpl::gradient::Gradient>,
 }
 
 /// A frame's rendered image: linear HDR, the 8-bit preview, optionally its components, and
@@ -132,9 +138,12 @@ pub struct Reuse {
     pub ism_tiles_kept: u32,
     /// VPL slots whose ISM tile was splatted and pulled/pushed again.
     pub ism_tiles_drawn: u32,
-    /// With `--accumulate`: the indirect light averaged the last frame's history (same
-    /// triangles and emitter samples; else it started anew).
+    /// With `--accumulate`: the indirect light averaged the last frame's history (as it was
+    /// with the same triangles and emitter samples, after the change test without; else it
+    /// started anew).
     pub history_kept: bool,
+    /// The history went through the change test (the light or the objects moved).
+    pub history_tested: bool,
 }
 
 /// What the raster passes drew of the frame's triangles, after leaving out what each view
@@ -437,12 +446,14 @@ impl Renderer {
         }
         let same_lights = self.upload_lights(f, input.emitter_samples);
         let lights_kept = self.reuse && same_lights;
-        // The history holds while the light is the same: same triangles, same emitter samples.
-        let history_kept = if let Some(t) = &mut self.passes.temporal {
+        // The history holds as it is while the light is the same (same triangles, same emitter
+        // samples); otherwise it goes through the change test.
+        let history = if let Some(t) = &mut self.passes.temporal {
             let offset = super::gbuffer::subsample(0, 0, self.config.aa);
-            t.upload(&self.gpu, view_proj, offset, same_tris && same_lights)
+            let same = same_tris && same_lights;
+            t.upload(&self.gpu, (view_proj, offset), same, input.gradient)
         } else {
-            false
+            HistoryUse::None
         };
         let c = &self.config;
         let (gw, gh) = c.grid();
@@ -488,7 +499,8 @@ impl Renderer {
             shadow_maps_kept: false,
             ism_tiles_kept: input.vpls.len() as u32 - changed.len() as u32,
             ism_tiles_drawn: changed.len() as u32,
-            history_kept,
+            history_kept: history != HistoryUse::None,
+            history_tested: history == HistoryUse::Gradient,
         };
         Ok((changed, reuse))
     }
