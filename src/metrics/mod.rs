@@ -4,6 +4,7 @@
 use crate::image::Hdr;
 use crate::math::luminance;
 pub mod floor;
+pub mod pattern;
 pub mod warp;
 
 use anyhow::{bail, Result};

@@ -11,6 +11,7 @@ mod environment;
 mod gpu;
 mod gpu_aa;
 mod gpu_passes;
+mod interleave_pattern;
 mod punctual;
 mod radiosity;
 mod scale;
