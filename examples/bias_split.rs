@@ -40,9 +40,9 @@ fn main() -> anyhow::Result<()> {
     let scene = irad::commands::load_scene(cfg.scene_name())?;
     let f: u32 = a[2].parse()?;
     let (w, h) = (cfg.sequence.size.width, cfg.sequence.size.height);
-    let clamp = irad::resolve::clamp(&cfg, &scene);
     let gpu = std::sync::Arc::new(Gpu::new(cfg.backend)?);
     let mut p = Pipeline::new(gpu, scene.clone(), &cfg)?;
+    let clamp = p.params.clamp;
     let o = p.render_frame(f, true)?;
     let frame = scene.at(f as f32 / cfg.sequence.fps);
     let tr = Tracer::new(&frame);

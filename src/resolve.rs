@@ -71,7 +71,7 @@ pub fn resolve(
     renderer.num_points = ism_point_set_size(renderer.ism_points, frame0.tris.len());
     Ok(Resolved {
         renderer,
-        sampler: sampler_params(cfg, scene),
+        sampler: sampler_params(cfg, frame0, tracer),
         radiosity: match cfg.method.solver() {
             Some(solver) => {
                 let s = radiosity_settings(cfg, solver, scene);
@@ -256,12 +256,83 @@ pub fn light_samples(cfg: &Render, frame0: &Frame, tracer: &Tracer, most: u32) -
     light_samples_for(&pairs, exact as u32 + area as u32).min(most)
 }
 
-/// The distance clamp for `scene`: `--clamp`, or 2% of its bounding-box diagonal at t = 0.
-pub fn clamp(cfg: &Render, scene: &Scene) -> f32 {
-    cfg.clamp.unwrap_or_else(|| {
-        let (lo, hi) = scene.at(0.0).bounds();
-        0.02 * (hi - lo).length()
-    })
+/// The distance clamp for `frame0` (a scene's frame 0, traced by `tracer`): `--clamp`, or
+/// [`CLAMP_OF_FREE_PATH`] times its mean free path ([`free_path`]); 2% of its bounding-box
+/// diagonal where no surface sees another.
+pub fn clamp(cfg: &Render, frame0: &Frame, tracer: &Tracer) -> f32 {
+    cfg.clamp
+        .unwrap_or_else(|| match free_path(frame0, tracer) {
+            Some(d) => CLAMP_OF_FREE_PATH * d,
+            None => {
+                let (lo, hi) = frame0.bounds();
+                0.02 * (hi - lo).length()
+            }
+        })
+}
+
+/// The default distance clamp as a fraction of the scene's mean free path: 0.0693 in the
+/// Cornell box, where the rule before (2% of the bounding-box diagonal) gave 0.0694.
+pub const CLAMP_OF_FREE_PATH: f32 = 1.0 / 14.0;
+
+/// Points [`free_path`] starts its rays from.
+const FREE_PATH_POINTS: usize = 8192;
+
+/// The scene's mean free path, the length its feature size is measured in (docs/math.md,
+/// section 4): from 8192 points on its surfaces (by area), a cosine-distributed ray on each
+/// side a receiver sees (the front only of single-sided triangles), and the mean distance to
+/// what those that hit something hit, but not from inside a closed mesh (4V/S in a closed
+/// convex room). It is how far a VPL's
+/// light travels to the next surface, so it follows the spaces light fills, neither where the
+/// scene sits nor the empty space around it (a far small object adds little area, and rays
+/// that leave the scene are not counted). None when fewer than 16 rays hit (no surface sees
+/// another). Deterministic; linear in the scene's scale up to float rounding.
+pub fn free_path(frame: &Frame, tracer: &Tracer) -> Option<f32> {
+    let mut cdf = Vec::with_capacity(frame.areas.len());
+    let mut acc = 0.0f64;
+    for &a in &frame.areas {
+        acc += a as f64;
+        cdf.push(acc);
+    }
+    let cutouts = frame.has_cutouts();
+    let mut d: Vec<f32> = Vec::with_capacity(2 * FREE_PATH_POINTS);
+    // A Hammersley-Halton set: the area stratified ((i + 0.382) / N: off the simple fractions
+    // at which the triangles of equal areas meet, where rounding would choose between two),
+    // the point on its triangle and the two rays' directions from radical inverses.
+    const GOLDEN: f64 = 0.381_966_011_250_105_1;
+    for i in 0..FREE_PATH_POINTS {
+        let u = (i as f64 + GOLDEN) / FREE_PATH_POINTS as f64 * acc;
+        let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+        // Rotated by irrational shifts (Cranley-Patterson), off the rational points and
+        // axis-aligned directions that meet a scene's edges exactly.
+        let r = |base: u32| (radical_inverse(i as u32, base) + base as f32 * GOLDEN as f32).fract();
+        let b = crate::math::triangle_barycentrics(glam::Vec2::new(r(2), r(3)));
+        if cutouts && frame.cut_at(tri, b.x, b.y) {
+            continue;
+        }
+        let x = frame.point(tri, b.x, b.y);
+        let n = frame.normals[tri];
+        let dirs = [
+            (n, glam::Vec2::new(r(5), r(7))),
+            (-n, glam::Vec2::new(r(11), r(13))),
+        ];
+        for (side, u) in dirs {
+            if side != n && tracer.single_sided(tri as u32) {
+                continue;
+            }
+            let dir = crate::math::cosine_hemisphere(side, u);
+            let hit = tracer.intersect(tracer.offset(x, n, dir), dir, f32::INFINITY);
+            // Not inside closed meshes, where no light the frame shows goes.
+            if let Some(h) = hit
+                .filter(|h| !tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], dir))
+            {
+                d.push(h.t);
+            }
+        }
+    }
+    if d.len() < 16 {
+        return None;
+    }
+    Some((d.iter().map(|&x| x as f64).sum::<f64>() / d.len() as f64) as f32)
 }
 
 /// The classical solver's settings for `scene` (element size from its size).
@@ -280,15 +351,26 @@ pub fn radiosity_settings(
     }
 }
 
-/// The sampler's parameters for `scene`.
-pub fn sampler_params(cfg: &Render, scene: &Scene) -> SamplerParams {
+/// The radical inverse of `i` in `base`, in [0, 1).
+fn radical_inverse(mut i: u32, base: u32) -> f32 {
+    let (mut inv, mut f) = (0.0f64, 1.0 / base as f64);
+    while i > 0 {
+        inv += (i % base) as f64 * f;
+        i /= base;
+        f /= base as f64;
+    }
+    (inv as f32).min(1.0 - f32::EPSILON / 2.0)
+}
+
+/// The sampler's parameters for `scene`, whose frame 0 is `frame0` traced by `tracer`.
+pub fn sampler_params(cfg: &Render, frame0: &Frame, tracer: &Tracer) -> SamplerParams {
     let s = &cfg.sampler;
     SamplerParams {
         kind: s.kind,
         slots: cfg.vpls as usize,
         candidates: s.candidates(cfg.vpls) as usize,
         knobs: s.knobs.clone(),
-        clamp: clamp(cfg, scene),
+        clamp: clamp(cfg, frame0, tracer),
         seed: cfg.sequence.seed,
         width: cfg.sequence.size.width,
         height: cfg.sequence.size.height,
@@ -384,6 +466,36 @@ mod tests {
         assert_eq!(ism_point_set_size(4096, 50_000_000), 1 << 22);
         assert_eq!(ism_point_set_size(1, 0), 1 << 16);
         assert_eq!(ism_point_set_size(1 << 23, 0), 1 << 23);
+    }
+
+    #[test]
+    fn the_default_clamp_is_a_fourteenth_of_the_mean_free_path() {
+        let of = |name: &str| {
+            let scene = crate::scene::builtin::load(name).unwrap().unwrap();
+            let f = scene.at(0.0);
+            let t = Tracer::new(&f);
+            (
+                free_path(&f, &t).unwrap(),
+                clamp(&Render::default(), &f, &t),
+            )
+        };
+        // In a closed convex room the mean free path is 4V/S (Cauchy): 4/3 in the empty
+        // cube of side 2 (measured 1.3313).
+        let (furnace, _) = of("furnace");
+        assert!((furnace - 4.0 / 3.0).abs() < 0.01, "furnace: {furnace}");
+        // The Cornell box's blocks shorten it (measured 0.9704): its clamp stays the 0.069 of
+        // the rule before (2% of its bounding-box diagonal, 0.0694).
+        let (cornell, c) = of("cornell");
+        assert!((cornell - 0.970).abs() < 0.005, "cornell: {cornell}");
+        assert!((c - 0.0694).abs() < 0.0005, "cornell's clamp: {c}");
+        // An explicit clamp is kept.
+        let scene = crate::scene::builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let r = Render {
+            clamp: Some(0.25),
+            ..Default::default()
+        };
+        assert_eq!(clamp(&r, &f, &Tracer::new(&f)), 0.25);
     }
 
     #[test]

@@ -51,7 +51,8 @@ pub struct Render {
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true))]
     pub vpls: u32,
     /// Distance clamp dmin of the VPL contribution, in scene units (0: off)
-    /// [default: 2% of the scene's bounding-box diagonal]
+    /// [default: 1/14 of the scene's mean free path, the mean distance from its surfaces to
+    /// what they see (docs/math.md, section 4)]
     #[cfg_attr(feature = "cli", arg(long, allow_hyphen_values = true))]
     pub clamp: Option<f32>,
     #[cfg_attr(feature = "cli", command(flatten))]

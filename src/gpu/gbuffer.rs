@@ -294,12 +294,13 @@ impl GBuffer {
     }
 
     /// Draws the triangles of `runs` (see [`CullView::runs`]) seen by `view_proj`, culling the
-    /// faces `skip` names in the `Front` runs (both from [`camera_view`]).
+    /// faces `skip` names in the `Front` runs (both from [`camera_view`]): the `vertices`
+    /// themselves (3 a triangle), or through `indices` into them where given.
     pub fn encode(
         &self,
         gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
-        vertices: &wgpu::Buffer,
+        (vertices, indices): (&wgpu::Buffer, Option<&wgpu::Buffer>),
         runs: &[(std::ops::Range<u32>, Draw)],
         (view_proj, skip, eye): (Mat4, wgpu::Face, Vec3),
     ) {
@@ -327,7 +328,12 @@ impl GBuffer {
             &tiles,
             (&self.view, &self.depth),
             vertices,
-            |pass| self.pipelines.draw(pass, runs, skip, false),
+            |pass| {
+                if let Some(b) = indices {
+                    pass.set_index_buffer(b.slice(..), wgpu::IndexFormat::Uint32);
+                }
+                self.pipelines.draw(pass, runs, skip, indices.is_some())
+            },
         );
     }
 }

@@ -10,7 +10,7 @@ use super::bindings::{dynamic_uniform, gpu_struct, Elem, Group, Pass};
 use super::common::Tri;
 use super::gbuffer::{self, skipped_faces};
 use super::Gpu;
-use crate::scene::culling::{CullView, Instance};
+use crate::scene::culling::{Clusters, CullView, Instance};
 use crate::scene::{EmitterSample, Frame, SampleKind};
 use glam::Vec3;
 use std::collections::HashMap;
@@ -239,17 +239,29 @@ pub struct ShadowMaps {
     pub drawn: (u64, u64, u64),
     /// Scenes without cut-outs draw shared corners through an index buffer.
     shared: Option<Shared>,
+    /// The spatial clusters each face culls by (`scene::culling::Clusters`): the triangles
+    /// are drawn in their order, through `shared`'s indices or, per triangle, through
+    /// `vertex_indices` into the renderer's vertices (3 a triangle; the G-buffer draws
+    /// through them too).
+    clusters: Clusters,
+    vertex_indices: wgpu::Buffer,
 }
 
 /// The scene's triangles with their corners shared: each distinct position once, and three
-/// indices a triangle (built anew whenever the geometry moves).
+/// indices a triangle (built anew whenever the geometry moves), in the drawing order of the
+/// clusters ([`ShadowMaps`]).
 struct Shared {
     pipelines: gbuffer::Pipelines,
     positions: wgpu::Buffer,
     indices: wgpu::Buffer,
-    /// The last upload's corners and indices (empty before the first).
+    /// The last upload's corners and indices (empty before the first), by the frame's order.
     corners: (Vec<[f32; 3]>, Vec<u32>),
 }
+
+/// Triangles a shadow-map cluster holds (`scene::culling::Clusters`): an instance of more
+/// than twice as many is cut into clusters a face culls one by one. On the 187k-triangle
+/// bench mesh (`benches/big_mesh.py`), 183 clusters; see docs/design.md, "Big meshes".
+pub const CLUSTER: usize = 1024;
 
 /// The distinct corner positions of `tris` (as `[x, y, z]`) and three indices into them a
 /// triangle: corners at the same position, bit for bit, are one.
@@ -384,7 +396,14 @@ impl ShadowMaps {
             false,
         )
         .create_view(&Default::default());
+        let vertex_indices = gpu.buffer(
+            "cluster vertex indices",
+            12 * triangles.max(1) as u64,
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        );
         ShadowMaps {
+            clusters: Default::default(),
+            vertex_indices,
             pipelines,
             uniform,
             bind_group,
@@ -399,14 +418,45 @@ impl ShadowMaps {
         }
     }
 
+    /// The clusters the triangles are drawn in the order of, and the renderer's vertices'
+    /// indices in that order (3 a triangle), after the last [`ShadowMaps::upload`].
+    pub(crate) fn clusters(&self) -> (&Clusters, &wgpu::Buffer) {
+        (&self.clusters, &self.vertex_indices)
+    }
+
     /// Uploads the frame's shared corners (after its geometry moved, or first). The last
     /// frame's sharing is kept if it still holds (every corner at its shared position once the
-    /// positions are moved), so a moving scene re-indexes only when corners that met part.
-    pub fn upload(&mut self, gpu: &Gpu, tris: &[[Vec3; 3]]) {
-        let Some(s) = &mut self.shared else { return };
-        if move_corners(&mut s.corners, tris) {
+    /// positions are moved), so a moving scene re-indexes only when corners that met part;
+    /// the clusters of `instances` are cut anew then, else their boxes follow the triangles.
+    pub fn upload(&mut self, gpu: &Gpu, tris: &[[Vec3; 3]], instances: &[Instance]) {
+        let fresh = self.clusters.order.len() != tris.len();
+        if fresh {
+            self.clusters = Clusters::of(tris, instances, CLUSTER);
+        } else {
+            self.clusters.refit(tris);
+        }
+        let order = &self.clusters.order;
+        if fresh {
+            let ordered: Vec<u32> = order
+                .iter()
+                .flat_map(|&t| [0, 1, 2].map(|c| 3 * t + c))
+                .collect();
             gpu.queue
-                .write_buffer(&s.indices, 0, bytemuck::cast_slice(&s.corners.1));
+                .write_buffer(&self.vertex_indices, 0, bytemuck::cast_slice(&ordered));
+        }
+        let Some(s) = &mut self.shared else {
+            return;
+        };
+        if move_corners(&mut s.corners, tris) || fresh {
+            let ordered: Vec<u32> = order
+                .iter()
+                .flat_map(|&t| {
+                    let k = 3 * t as usize;
+                    s.corners.1[k..k + 3].iter().copied()
+                })
+                .collect();
+            gpu.queue
+                .write_buffer(&s.indices, 0, bytemuck::cast_slice(&ordered));
         }
         gpu.queue
             .write_buffer(&s.positions, 0, bytemuck::cast_slice(&s.corners.0));
@@ -451,8 +501,19 @@ impl ShadowMaps {
                 let o = (j * 5 + k) * self.stride as usize;
                 bytes[o..o + std::mem::size_of::<Face>()]
                     .copy_from_slice(bytemuck::bytes_of(&face));
-                let runs = face_view((r, u, f), s.position, near, ortho > 0.0)
-                    .runs(if cull { instances } else { &[] }, tris);
+                let mut view = face_view((r, u, f), s.position, near, ortho > 0.0);
+                // An area sample (or half a point light) lights only what lies in front of its
+                // plane, and what lies between it and that is in front too: what lies wholly
+                // behind the plane (the ceiling around a ceiling light) shadows nothing.
+                if matches!(s.kind, SampleKind::Area | SampleKind::PointHalf) {
+                    view.sides.push((s.normal, -s.normal.dot(s.position)));
+                }
+                // The triangles are drawn in their clusters' order.
+                let runs = if cull {
+                    view.cluster_runs(instances, &self.clusters, tris)
+                } else {
+                    vec![(0..tris, crate::scene::culling::Draw::All)]
+                };
                 layers.push((j * 5 + k, viewport, runs, skipped_faces(r, u, f)));
             }
         }
@@ -485,7 +546,11 @@ impl ShadowMaps {
                     &tile,
                     target,
                     vertices,
-                    |pass| self.pipelines.draw(pass, &runs, skip, false),
+                    |pass| {
+                        let b = &self.vertex_indices;
+                        pass.set_index_buffer(b.slice(..), wgpu::IndexFormat::Uint32);
+                        self.pipelines.draw(pass, &runs, skip, true)
+                    },
                 ),
             }
         }

@@ -98,6 +98,120 @@ impl CullView {
         runs.retain(|(_, d)| *d != Draw::Skip);
         runs
     }
+    /// Like [`CullView::runs`], over `clusters`' drawing order: a cluster is skipped where its
+    /// own box or its instance's is wholly outside the view, and otherwise drawn as its
+    /// instance is ([`CullView::draw`]); positions outside every cluster are drawn whole.
+    pub fn cluster_runs(
+        &self,
+        instances: &[Instance],
+        clusters: &Clusters,
+        count: u32,
+    ) -> Vec<(Range<u32>, Draw)> {
+        let mut runs: Vec<(Range<u32>, Draw)> = Vec::new();
+        let mut push = |r: Range<u32>, d: Draw| {
+            if r.is_empty() {
+                return;
+            }
+            match runs.last_mut() {
+                Some((last, e)) if *e == d && last.end == r.start => last.end = r.end,
+                _ => runs.push((r, d)),
+            }
+        };
+        let mut at = 0;
+        let mut last: Option<(usize, Draw)> = None;
+        for (c, k) in &clusters.list {
+            let r = c.tris.start.clamp(at, count)..c.tris.end.clamp(at, count);
+            push(at..r.start, Draw::All);
+            let whole = match last {
+                Some((i, d)) if i == *k => d,
+                _ => instances.get(*k).map_or(Draw::All, |i| self.draw(i)),
+            };
+            last = Some((*k, whole));
+            let d = if whole != Draw::Skip && self.draw(c) == Draw::Skip {
+                Draw::Skip
+            } else {
+                whole
+            };
+            push(r.clone(), d);
+            at = at.max(r.end);
+        }
+        push(at..count, Draw::All);
+        runs.retain(|(_, d)| *d != Draw::Skip);
+        runs
+    }
+}
+
+/// Spatial clusters of the frame's triangles, for culling views finer than by instance (see
+/// docs/design.md, "Big meshes"): an instance of more than `2 size` triangles is cut into
+/// runs of `size` triangles in the Morton order of their centroids within its box, each with
+/// its own box; a smaller instance is one cluster. The order is a drawing order (position `k`
+/// draws the frame's triangle `order[k]`) that keeps each instance's triangles together and
+/// every triangle outside an instance where it was.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Clusters {
+    /// The drawing order: the frame's triangle index at each position.
+    pub order: Vec<u32>,
+    /// Each cluster (its positions in `order` as `tris`, its box; `closed` unused) and the
+    /// instance it belongs to.
+    pub list: Vec<(Instance, usize)>,
+}
+
+impl Clusters {
+    /// The clusters of `tris` over `instances`, of `size` triangles at most.
+    pub fn of(tris: &[[Vec3; 3]], instances: &[Instance], size: usize) -> Clusters {
+        let size = size.max(1);
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let mut list = Vec::new();
+        for (k, i) in instances.iter().enumerate() {
+            let r = i.tris.start as usize..(i.tris.end as usize).min(tris.len());
+            if r.is_empty() {
+                continue;
+            }
+            if r.len() > 2 * size {
+                let ext = (i.hi - i.lo).max(Vec3::splat(1e-30));
+                let code = |t: u32| {
+                    let [a, b, c] = tris[t as usize];
+                    let q = (((a + b + c) / 3.0 - i.lo) / ext * 1023.0)
+                        .clamp(Vec3::ZERO, Vec3::splat(1023.0));
+                    morton(q.x as u32) | morton(q.y as u32) << 1 | morton(q.z as u32) << 2
+                };
+                order[r.clone()].sort_by_cached_key(|&t| (code(t), t));
+            }
+            let n = if r.len() > 2 * size { size } else { r.len() };
+            for s in r.clone().step_by(n) {
+                let e = (s + n).min(r.end);
+                list.push((
+                    Instance {
+                        tris: s as u32..e as u32,
+                        lo: Vec3::ZERO,
+                        hi: Vec3::ZERO,
+                        closed: false,
+                    },
+                    k,
+                ));
+            }
+        }
+        let mut c = Clusters { order, list };
+        c.refit(tris);
+        c
+    }
+
+    /// Moves each cluster's box to `tris` (the same triangles, moved).
+    pub fn refit(&mut self, tris: &[[Vec3; 3]]) {
+        for (c, _) in &mut self.list {
+            let ids = &self.order[c.tris.start as usize..c.tris.end as usize];
+            (c.lo, c.hi) = super::bounds(ids.iter().flat_map(|&t| tris[t as usize]));
+        }
+    }
+}
+
+/// The bits of `v` (10 of them) spread to every third bit.
+fn morton(v: u32) -> u32 {
+    let mut x = v & 0x3ff;
+    x = (x | x << 16) & 0x0300_00ff;
+    x = (x | x << 8) & 0x0300_f00f;
+    x = (x | x << 4) & 0x030c_30c3;
+    (x | x << 2) & 0x0924_9249
 }
 
 /// Whether the mesh made of `prims` is closed (see the module's text), each of its separate
@@ -333,5 +447,81 @@ mod tests {
         assert_eq!(touch.draw(&all[1]), Front);
         assert_eq!(view((Vec3::X, 1.0)).runs(&[], 3), vec![(0..3, All)]);
         assert_eq!(view((Vec3::X, 1.0)).runs(&all, 0), vec![]);
+    }
+
+    /// A 64 x 64 grid of 8192 triangles in rows (one instance, as a tessellated plane comes),
+    /// a closed 12-triangle box after it and two loose triangles: the clusters cut the grid
+    /// (not the box), hold every triangle once with its instance's, box what they hold, and a
+    /// view draws every triangle that reaches into it, of the grid only about what it sees.
+    #[test]
+    fn clusters_cull_a_big_grid_by_parts_and_keep_every_triangle_seen() {
+        let mut tris = Vec::new();
+        for j in 0..64 {
+            for i in 0..64 {
+                let p = |a: f32, b: f32| Vec3::new(i as f32 + a, 0.0, j as f32 + b);
+                tris.push([p(0., 0.), p(1., 0.), p(1., 1.)]);
+                tris.push([p(0., 0.), p(1., 1.), p(0., 1.)]);
+            }
+        }
+        let grid = Instance {
+            tris: 0..8192,
+            lo: Vec3::ZERO,
+            hi: Vec3::new(64.0, 0.0, 64.0),
+            closed: false,
+        };
+        let b = |k: u32| Vec3::new(100.0 + (k & 1) as f32, (k >> 1 & 1) as f32, (k >> 2) as f32);
+        for k in 0..12 {
+            tris.push([b(k % 8), b((k + 1) % 8), b((k + 3) % 8)]);
+        }
+        let cube = Instance {
+            tris: 8192..8204,
+            lo: b(0),
+            hi: b(7),
+            closed: true,
+        };
+        tris.push([Vec3::ZERO, Vec3::X, Vec3::Y]);
+        tris.push([Vec3::ZERO, Vec3::Y, Vec3::Z]);
+        let instances = [grid, cube];
+        let c = Clusters::of(&tris, &instances, 256);
+        assert_eq!(c.list.len(), 32 + 1);
+        let mut seen = c.order.clone();
+        seen.sort();
+        assert_eq!(seen, (0..8206).collect::<Vec<u32>>());
+        assert!(c.order[..8192].iter().all(|&t| t < 8192));
+        assert_eq!(&c.order[8192..], &(8192..8206).collect::<Vec<u32>>()[..]);
+        for (cl, k) in &c.list {
+            for &t in &c.order[cl.tris.start as usize..cl.tris.end as usize] {
+                assert!(instances[*k].tris.contains(&t));
+                for p in tris[t as usize] {
+                    assert!(p.cmpge(cl.lo).all() && p.cmple(cl.hi).all());
+                }
+            }
+        }
+        // In Morton order a cluster of 256 triangles is an 8 x 16 patch.
+        let (cl, _) = &c.list[5];
+        assert_eq!(((cl.hi - cl.lo).x * (cl.hi - cl.lo).z) as u32, 128);
+        // A view of x <= 10 (everything in front of its near plane): the clusters that reach
+        // there, the box as its instance says (front faces), the loose triangles whole.
+        let view = CullView {
+            near: (Vec3::Y, 1.0),
+            sides: vec![(-Vec3::X, 10.0)],
+        };
+        let runs = view.cluster_runs(&instances, &c, 8206);
+        let (all, _) = counts(&runs);
+        let drawn: std::collections::HashSet<u32> = runs
+            .iter()
+            .flat_map(|(r, _)| c.order[r.start as usize..r.end as usize].iter().copied())
+            .collect();
+        for (t, tri) in tris.iter().enumerate().take(8192) {
+            if tri.iter().any(|p| p.x <= 10.0) {
+                assert!(drawn.contains(&(t as u32)), "triangle {t}");
+            }
+        }
+        // The patches that reach x = 10 are those of columns 0..16: 2 x 16 x 64 = 2048
+        // triangles drawn (1408 in the 11 columns seen), of the grid's 8192.
+        assert_eq!(all, 2048 + 2, "{runs:?}");
+        assert_eq!(runs.last(), Some(&(8204..8206, Draw::All)));
+        // The plain runs draw the whole grid.
+        assert_eq!(counts(&view.runs(&instances, 8206)).0, 8192 + 2);
     }
 }

@@ -218,6 +218,24 @@ pub fn quad_under_light(panel: Panel) -> Scene {
 /// `scale` and moved by `offset` (one root node), seen from (0, 0, 3.5) scaled and moved
 /// alike (a camera node under the root), 0.75 rad. Returns the document.
 pub fn cornell_like(scale: f32, offset: [f32; 3]) -> Value {
+    let scale = [scale; 3];
+    cornell_like_quads()
+        .0
+        .finish_under(json!({ "scale": scale, "translation": offset }))
+}
+
+/// [`cornell_like`]'s box (scale 1, in the origin) and, far from it, a white cube of side 0.2
+/// centred at `at`, which makes the scene's bounding box that much larger. Returns the
+/// document.
+pub fn cornell_like_and_far_cube(at: [f32; 3]) -> Value {
+    let (mut q, white) = cornell_like_quads();
+    q.cube(at.map(|a| a - 0.1), at.map(|a| a + 0.1), white);
+    q.finish()
+}
+
+/// [`cornell_like`]'s box at scale 1 in the origin, not yet finished (to add more to it), and
+/// its white material.
+pub fn cornell_like_quads() -> (Quads, usize) {
     let mut q = Quads::default();
     let white = q.material(0.7, 0.0, true);
     let red = q.material(0.6, 0.0, true);
@@ -258,8 +276,7 @@ pub fn cornell_like(scale: f32, offset: [f32; 3]) -> Value {
         q.quad(at(d), s(u), s(v), white, json!({}));
     }
     q.camera([0., 0., 3.5], 0.75);
-    let scale = [scale; 3];
-    q.finish_under(json!({ "scale": scale, "translation": offset }))
+    (q, white)
 }
 
 /// A model without any light, as most downloaded models: a grey floor (4 x 4 at y = 0,

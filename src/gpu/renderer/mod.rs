@@ -359,7 +359,7 @@ impl Renderer {
                 })
                 .collect();
             q.write_buffer(&self.vertices, 0, bytemuck::cast_slice(&verts));
-            self.passes.shadows.upload(&self.gpu, &f.tris);
+            self.passes.shadows.upload(&self.gpu, &f.tris, &f.instances);
             self.last.tris = tris;
         }
         same_bits
@@ -538,7 +538,14 @@ impl Renderer {
         // The raster passes leave out the instances outside their view and the back faces of
         // closed ones.
         let (skip, view) = super::gbuffer::camera_view(f.view_proj, c.width, c.height);
-        let runs = view.runs(instances, tris);
+        // By the spatial clusters of big instances (`scene::culling::Clusters`), drawn in
+        // their order.
+        let (clusters, order) = self.passes.shadows.clusters();
+        let (runs, indices) = if self.cull {
+            (view.cluster_runs(instances, clusters, tris), Some(order))
+        } else {
+            (view.runs(&[], tris), None)
+        };
         let (all, front) = crate::scene::culling::counts(&runs);
         f.drawn.triangles = tris as u64;
         (f.drawn.gbuffer_triangles, f.drawn.gbuffer_front_only) = (all, front);
@@ -546,7 +553,7 @@ impl Renderer {
         self.passes.gbuffer.encode(
             &self.gpu,
             enc,
-            &self.vertices,
+            (&self.vertices, indices),
             &runs,
             (f.view_proj, skip, eye),
         );
