@@ -58,7 +58,8 @@ pub enum Input {
     Size(Option<Size>),
     /// Show each half's flicker as a heat map in place of its image.
     Heat(bool),
-    /// Print the current view as `--camera` and the `irad render` command line.
+    /// Print the current view as `--camera EYE:TARGET:FOV` and the `irad render` command line
+    /// (stdout, and the panel's message).
     CopyView,
     /// Save each half's last frame (EXR and PNG) in the output folder.
     SaveFrame,
@@ -213,6 +214,9 @@ pub struct App {
     pub heat: bool,
     /// Seconds between the last two steps, smoothed (frame rate = 1 / this).
     pub frame_seconds: f64,
+    /// Seconds the halves' rendering took in the last step, smoothed (the rest of a frame
+    /// is the window's: the controls, the copy to the screen).
+    pub render_seconds: f64,
     last_step: Option<Instant>,
     /// What the view last said (a command line, a saved file, an error).
     pub message: String,
@@ -249,6 +253,7 @@ impl App {
             auto,
             heat: false,
             frame_seconds: 0.0,
+            render_seconds: 0.0,
             last_step: None,
             message: String::new(),
             saved: Vec::new(),
@@ -361,9 +366,9 @@ impl App {
             },
             Input::Heat(h) => self.heat = h,
             Input::CopyView => {
-                let line = self.command_line();
-                self.message = line.clone();
-                crate::outln!("{line}")?;
+                let cam = camera::rounded(&self.current_camera());
+                self.message = format!("--camera {cam}\n{}", self.command_line());
+                crate::outln!("{}", self.message)?;
             }
             Input::SaveFrame => {
                 self.saved = self.save_frame()?;
@@ -430,6 +435,13 @@ impl App {
         }
         let seconds = started.elapsed().as_secs_f64();
         let first = std::mem::replace(&mut self.first_after_build, false);
+        if !first {
+            self.render_seconds = if self.render_seconds == 0.0 {
+                seconds
+            } else {
+                0.8 * self.render_seconds + 0.2 * seconds
+            };
+        }
         let height = self.cfg.sequence.size.height;
         if let Some(h) = self
             .auto
@@ -478,8 +490,7 @@ impl App {
         a.push(quote(c.sequence.scene_or(config::DEFAULT_STILL_SCENE)));
         let cam = camera::rounded(&self.current_camera());
         a.push(format!("--camera {cam}"));
-        let frame = (self.time as f64 * c.sequence.fps as f64).round() as u32;
-        a.push(format!("--frames {frame}"));
+        a.push(format!("--frames {}", self.render_frame()));
         a.push(format!("--size {}", c.sequence.size));
         if c.method != Method::Instant {
             a.push(format!("--method {}", c.method.name()));
@@ -523,10 +534,35 @@ impl App {
         if let Some(e) = &c.sequence.environment {
             a.push(format!("--environment {}", quote(&e.to_string())));
         }
+        if c.backend != d.backend {
+            a.push(format!(
+                "--backend {}",
+                format!("{:?}", c.backend).to_lowercase()
+            ));
+        }
         if c.sequence.allow_outside_paths {
             a.push("--allow-outside-paths".into());
         }
         a.join(" ")
+    }
+
+    /// The frame `irad render --frames` is given for the view: the index of the frame shown
+    /// when the scene at that frame's time is the scene shown (a still scene, or time and
+    /// index in step, as while playing from the start), so that a sampler without history
+    /// (uniform, cdf, rejection) renders the same image; else the frame of the current time.
+    pub fn render_frame(&self) -> u32 {
+        let fps = self.cfg.sequence.fps as f64;
+        let shown = self
+            .halves
+            .first()
+            .and_then(|h| h.output.as_ref())
+            .map_or(self.index, |o| o.index);
+        let in_step = (shown as f64 / fps - self.time as f64).abs() < 1e-6;
+        if self.duration() == 0.0 || in_step {
+            shown
+        } else {
+            (self.time as f64 * fps).round() as u32
+        }
     }
 
     /// Writes each half's last frame into the output folder (`cfg.out`) as

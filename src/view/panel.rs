@@ -59,8 +59,9 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
     };
     ui.heading("irad view");
     ui.label(format!(
-        "{fps:.1} fps ({:.0} ms), render {}{}",
+        "{fps:.1} fps ({:.0} ms: render {:.0} ms), size {}{}",
         app.frame_seconds * 1e3,
+        app.render_seconds * 1e3,
         app.cfg.sequence.size,
         if app.auto.is_some() { " (auto)" } else { "" }
     ));

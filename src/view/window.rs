@@ -224,13 +224,15 @@ impl Handler {
                 &crate::image::encode(&pixels, image::ImageFormat::Png)?,
             )?;
             crate::outln!(
-                "wrote {} ({}x{}, after {} frames at {} render size, {:.1} fps)",
+                "wrote {} ({}x{}, after {} frames at render size {}: {:.1} fps, {:.0} ms a frame of which {:.0} ms rendering)",
                 path.display(),
                 pixels.width(),
                 pixels.height(),
                 self.frames,
                 r.app.cfg.sequence.size,
-                1.0 / r.app.frame_seconds.max(1e-9)
+                1.0 / r.app.frame_seconds.max(1e-9),
+                r.app.frame_seconds * 1e3,
+                r.app.render_seconds * 1e3,
             )?;
         }
         for id in &out.textures_delta.free {

@@ -100,6 +100,9 @@ fn view_screenshot_under_xvfb_shows_a_lit_cornell_box() {
         .filter(|&(x, _)| x > 320)
         .collect();
     assert!(!bright.is_empty(), "no white light in the image area");
+    // The ceiling light: in the upper part of the window (the box fills the image's height).
+    let y = bright.iter().map(|p| p.1 as f64).sum::<f64>() / bright.len() as f64;
+    assert!(y < 400.0 / 3.0, "the white pixels' mean height {y}");
     println!(
         "{} white pixels, mean {mean:.1}, {:.1} s",
         bright.len(),

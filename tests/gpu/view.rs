@@ -102,12 +102,19 @@ fn the_update_step_orbits_switches_splits_and_saves() {
     let png = image::open(&app.saved[1]).unwrap();
     assert_eq!((png.width(), png.height()), (40, 32));
 
-    // The printed command line gives the same settings and camera back: `irad render`'s
-    // pipeline built from it renders the saved frame (the same frame index: uniform keeps no
-    // state between frames).
-    let line = app.command_line();
+    // The printed command line gives the same settings and camera back, and `irad render`
+    // of it renders the saved frame (uniform keeps no state between frames; the still scene's
+    // frame is the index shown).
+    app.apply(Input::CopyView).unwrap();
+    let (spec, line) = app.message.split_once('\n').unwrap();
+    assert!(
+        spec.starts_with("--camera ") && line.contains(spec),
+        "{}",
+        app.message
+    );
+    let line = line.to_string();
     let args: Vec<&str> = line.split_whitespace().collect();
-    let irad::cli::Command::Render(r) = irad::cli::Cli::try_parse_from(&args).unwrap().command
+    let irad::cli::Command::Render(mut r) = irad::cli::Cli::try_parse_from(&args).unwrap().command
     else {
         panic!("{line}")
     };
@@ -117,12 +124,11 @@ fn the_update_step_orbits_switches_splits_and_saves() {
         (32, app.cfg.sequence.size),
         "{line}"
     );
-    let mut r = r;
-    r.backend = common::backend();
-    let scene = r.sequence.load_scene(DEFAULT_STILL_SCENE).unwrap();
-    let mut p = irad::frame::Pipeline::new(app.gpu.clone(), scene, &r).unwrap();
     let index = app.halves[0].output.as_ref().unwrap().index;
-    let again = p.render_at(index, app.time, false).unwrap().image.hdr;
+    assert!(line.contains(&format!("--frames {index} ")), "{line}");
+    r.out = app.cfg.out.join("render");
+    irad::commands::render::render(&r).unwrap();
+    let again = Hdr::read(&r.out.join(format!("frame_{index:04}.exr"))).unwrap();
     let c = common::compare(
         "view_update_step",
         "command_line",
