@@ -93,6 +93,17 @@ fn the_update_step_orbits_switches_splits_and_saves() {
     for h in &app.halves {
         assert!(h.flicker.f1.is_some(), "{:?}", h.sampler);
     }
+    // The heat map shows where the indirect light changed: not all black, not all white.
+    app.apply(Input::Heat(true)).unwrap();
+    let (w, h, heat) = app.shown(0).unwrap();
+    assert_eq!(heat.len(), (w * h * 3) as usize);
+    let lit = heat.iter().filter(|&&b| b > 0).count();
+    assert!(lit > 0 && lit < heat.len(), "{lit} of {}", heat.len());
+    app.apply(Input::Heat(false)).unwrap();
+    assert_eq!(
+        app.shown(0).unwrap().2,
+        app.halves[0].output.as_ref().unwrap().image.ldr
+    );
 
     // Save the frame: an EXR and a PNG per half, the EXR the frame shown.
     app.apply(Input::SaveFrame).unwrap();
