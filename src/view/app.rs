@@ -66,7 +66,8 @@ pub enum Input {
 }
 
 /// How the render size follows the frame time when it is not fixed (docs/view.md): every
-/// [`AutoSize::EVERY`] frames, the height is scaled by sqrt(target / mean frame time) (the
+/// [`AutoSize::EVERY`] frames, the height is scaled by sqrt(target / mean seconds the halves'
+/// rendering took; the window's drawing does not scale with the size and is left out) (the
 /// cost is about proportional to the pixels), clamped to 0.5..2 per change, to a multiple of
 /// 8 between [`AutoSize::MIN_HEIGHT`] and the room the window gives, and changed only when that
 /// moves it by 15% or more. The target is 10 frames a second on a software adapter
