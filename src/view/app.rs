@@ -213,11 +213,14 @@ pub struct App {
     first_after_build: bool,
     pub auto: Option<AutoSize>,
     pub heat: bool,
-    /// Seconds between the last two steps, smoothed (frame rate = 1 / this).
+    /// Seconds from one step to the next, the median of the last 15 (frame rate = 1 / this).
     pub frame_seconds: f64,
-    /// Seconds the halves' rendering took in the last step, smoothed (the rest of a frame
-    /// is the window's: the controls, the copy to the screen).
+    /// Seconds the halves' rendering took, the median of the last 15 steps that did not
+    /// rebuild them (the rest of a frame is the window's: the controls, the copy to the
+    /// screen).
     pub render_seconds: f64,
+    intervals: Vec<f64>,
+    render_times: Vec<f64>,
     last_step: Option<Instant>,
     /// What the view last said (a command line, a saved file, an error).
     pub message: String,
@@ -255,6 +258,8 @@ impl App {
             heat: false,
             frame_seconds: 0.0,
             render_seconds: 0.0,
+            intervals: Vec::new(),
+            render_times: Vec::new(),
             last_step: None,
             message: String::new(),
             saved: Vec::new(),
@@ -395,12 +400,13 @@ impl App {
         }
         let now = Instant::now();
         if let Some(last) = self.last_step {
-            let dt = now.duration_since(last).as_secs_f64();
-            self.frame_seconds = if self.frame_seconds == 0.0 {
-                dt
-            } else {
-                0.8 * self.frame_seconds + 0.2 * dt
-            };
+            // The median of the last intervals: a frame that rebuilt the halves is not the
+            // rate.
+            self.intervals.push(now.duration_since(last).as_secs_f64());
+            if self.intervals.len() > 15 {
+                self.intervals.remove(0);
+            }
+            self.frame_seconds = median(&self.intervals);
         }
         self.last_step = Some(now);
         let view = self.camera;
@@ -437,11 +443,11 @@ impl App {
         let seconds = started.elapsed().as_secs_f64();
         let first = std::mem::replace(&mut self.first_after_build, false);
         if !first {
-            self.render_seconds = if self.render_seconds == 0.0 {
-                seconds
-            } else {
-                0.8 * self.render_seconds + 0.2 * seconds
-            };
+            self.render_times.push(seconds);
+            if self.render_times.len() > 15 {
+                self.render_times.remove(0);
+            }
+            self.render_seconds = median(&self.render_times);
         }
         let height = self.cfg.sequence.size.height;
         if let Some(h) = self
@@ -596,6 +602,13 @@ impl App {
         }
         Ok(out)
     }
+}
+
+/// The median of `v` (0 for none).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
 }
 
 /// `size` with height `h` and the width that keeps its aspect (a multiple of 8, at least 8).
