@@ -76,7 +76,11 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         let mut t = app.time;
         let d = app.duration();
         if ui
-            .add(egui::Slider::new(&mut t, 0.0..=d.max(1e-3)).text("s"))
+            .add(
+                egui::Slider::new(&mut t, 0.0..=d.max(1e-3))
+                    .max_decimals(2)
+                    .text("s"),
+            )
             .changed()
         {
             inputs.push(Input::Scrub(t));
@@ -205,30 +209,6 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         ui.add(egui::Label::new(egui::RichText::new(&app.message).monospace().small()).wrap());
     }
     ui.separator();
-    // Each half's flicker and the passes' times.
-    for h in &app.halves {
-        let f = &h.flicker;
-        ui.label(match f.f1 {
-            Some(f1) => format!(
-                "{}: flicker F1 {f1:.2e} ({:.1}%), mean of {} still frames {:.2e} ({:.1}%)",
-                h.sampler.name(),
-                100.0 * f.relative.unwrap_or(0.0),
-                f.still_frames,
-                f.mean_f1,
-                100.0 * f.mean_relative
-            ),
-            None => format!("{}: flicker - (the view moved)", h.sampler.name()),
-        });
-    }
-    if let Some(o) = app.halves.first().and_then(|h| h.output.as_ref()) {
-        egui::CollapsingHeader::new(format!("stages of a frame ({:.1} ms)", o.seconds * 1e3))
-            .default_open(true)
-            .show(ui, |ui| {
-                for (name, t) in o.stages.iter().filter(|(_, t)| *t > 0.0) {
-                    ui.monospace(format!("{name:16} {:7.2} ms", t * 1e3));
-                }
-            });
-    }
     egui::CollapsingHeader::new("keys").show(ui, |ui| {
         for (k, what) in KEYS {
             ui.label(format!("{k}: {what}"));
@@ -258,8 +238,10 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
     ui.horizontal(|ui| {
         for (t, h) in textures.iter().zip(&app.halves) {
             let size = t.size_vec2();
+            // Room below for the labels, the flicker and the stages' table.
+            let height = (room.y - 230.0).max(0.5 * room.y);
             let scale = ((room.x / n - 8.0) / size.x)
-                .min((room.y - 24.0) / size.y)
+                .min(height / size.y)
                 .max(0.05);
             ui.vertical(|ui| {
                 ui.label(format!("{} ({})", h.sampler.name(), app.cfg.method.name()));
@@ -291,9 +273,41 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
                         inputs.push(Input::Dolly(s / 50.0));
                     }
                 }
+                let f = &h.flicker;
+                ui.label(match f.f1 {
+                    Some(f1) => format!(
+                        "flicker F1 {f1:.2e} ({:.1}% of the indirect)\nmean over {} still frames {:.2e} ({:.1}%)",
+                        100.0 * f.relative.unwrap_or(0.0),
+                        f.still_frames,
+                        f.mean_f1,
+                        100.0 * f.mean_relative
+                    ),
+                    None => "flicker: - (the view moved)".to_string(),
+                });
             });
         }
     });
+    // The stages of the left half's last frame (CPU stages and GPU passes), in columns.
+    if let Some(o) = app.halves.first().and_then(|h| h.output.as_ref()) {
+        ui.separator();
+        ui.label(format!(
+            "stages of a frame of {} ({:.1} ms)",
+            app.halves[0].sampler.name(),
+            o.seconds * 1e3
+        ));
+        let stages: Vec<_> = o.stages.iter().filter(|(_, t)| *t > 0.0).collect();
+        let rows = stages.len().div_ceil(3);
+        egui::Grid::new("stages").striped(true).show(ui, |ui| {
+            for r in 0..rows {
+                for c in 0..3 {
+                    if let Some((name, t)) = stages.get(c * rows + r) {
+                        ui.monospace(format!("{name:16} {:7.2} ms", t * 1e3));
+                    }
+                }
+                ui.end_row();
+            }
+        });
+    }
 }
 
 /// The keys (when no text field has the focus); returns whether Esc asked to quit.

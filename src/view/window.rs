@@ -234,6 +234,15 @@ impl Handler {
                 r.app.frame_seconds * 1e3,
                 r.app.render_seconds * 1e3,
             )?;
+            if let Some(o) = r.app.halves.first().and_then(|h| h.output.as_ref()) {
+                let stages: Vec<String> = o
+                    .stages
+                    .iter()
+                    .filter(|(_, t)| *t > 0.0)
+                    .map(|(n, t)| format!("{n} {:.2}", t * 1e3))
+                    .collect();
+                crate::outln!("stages of the last frame (ms): {}", stages.join(", "))?;
+            }
         }
         for id in &out.textures_delta.free {
             r.painter.free_texture(id);
