@@ -420,12 +420,10 @@ impl App {
             }
             let out = h.pipeline.render_at(self.index, self.time, true)?;
             let still = h.seen == Some(seen);
-            match (&h.output, still) {
-                (Some(prev), true) => {
-                    let (f1, rel, map) = flicker_of(
-                        out.image.indirect.as_ref().expect("components"),
-                        prev.image.indirect.as_ref().expect("components"),
-                    );
+            let before = h.output.as_ref().and_then(|o| o.image.indirect.as_ref());
+            match (out.image.indirect.as_ref(), before, still) {
+                (Some(now), Some(before), true) => {
+                    let (f1, rel, map) = flicker_of(now, before);
                     let fl = &mut h.flicker;
                     let n = fl.still_frames as f64;
                     fl.mean_f1 = (fl.mean_f1 * n + f1) / (n + 1.0);

@@ -127,8 +127,7 @@ impl Handler {
         let mut start = self.view.start();
         if !start.fixed_size {
             // The room for the images: the window less the panel, at most --size.
-            let room = (inner.height.saturating_sub(48)).max(AutoSize::MIN_HEIGHT);
-            let h = start.render.sequence.size.height.min(room);
+            let h = start.render.sequence.size.height.min(room(inner.height));
             start.render.sequence.size.width =
                 (start.render.sequence.size.width * h / start.render.sequence.size.height).max(8);
             start.render.sequence.size.height = h;
@@ -280,6 +279,11 @@ impl ApplicationHandler for Handler {
                 r.config.width = s.width.max(1);
                 r.config.height = s.height.max(1);
                 r.surface.configure(&r.app.gpu.device, &r.config);
+                // The size rule's room follows the window (at most --size).
+                let most = self.view.render.sequence.size.height;
+                if let Some(a) = &mut r.app.auto {
+                    a.max_height = room(s.height).min(most);
+                }
             }
             WindowEvent::RedrawRequested => match self.frame() {
                 Ok(true) => {
@@ -298,6 +302,13 @@ impl ApplicationHandler for Handler {
             r.window.request_redraw();
         }
     }
+}
+
+/// The render height a window `height` pixels high has room for (less the labels, the
+/// flicker and the stages' table below the images; see `panel::images`).
+fn room(height: u32) -> u32 {
+    let h = height as f32;
+    ((h - 230.0).max(0.5 * h) as u32).max(AutoSize::MIN_HEIGHT)
 }
 
 /// Draws egui's `jobs` into `target` (cleared first).
