@@ -372,7 +372,7 @@ impl App {
             },
             Input::Heat(h) => self.heat = h,
             Input::CopyView => {
-                let cam = camera::rounded(&self.current_camera());
+                let cam = camera::rounded(&self.shown_camera());
                 self.message = format!("--camera {cam}\n{}", self.command_line());
                 crate::outln!("{}", self.message)?;
             }
@@ -487,13 +487,13 @@ impl App {
         Some((w, ht, o.image.ldr.clone()))
     }
 
-    /// The `irad render` command line of the current view and settings (left half's sampler),
-    /// with `--camera` the view's camera and `--frames` the frame of the current time.
+    /// The `irad render` command line of the frame shown and the settings (left half's
+    /// sampler), with `--camera` its camera and `--frames` as [`App::render_frame`] says.
     pub fn command_line(&self) -> String {
         let c = &self.cfg;
         let mut a = vec!["irad".to_string(), "render".to_string()];
         a.push(quote(c.sequence.scene_or(config::DEFAULT_STILL_SCENE)));
-        let cam = camera::rounded(&self.current_camera());
+        let cam = camera::rounded(&self.shown_camera());
         a.push(format!("--camera {cam}"));
         a.push(format!("--frames {}", self.render_frame()));
         a.push(format!("--size {}", c.sequence.size));
@@ -557,17 +557,27 @@ impl App {
     /// (uniform, cdf, rejection) renders the same image; else the frame of the current time.
     pub fn render_frame(&self) -> u32 {
         let fps = self.cfg.sequence.fps as f64;
-        let shown = self
-            .halves
-            .first()
-            .and_then(|h| h.output.as_ref())
-            .map_or(self.index, |o| o.index);
-        let in_step = (shown as f64 / fps - self.time as f64).abs() < 1e-6;
+        let (shown, time) = self.shown_frame();
+        let in_step = (shown as f64 / fps - time as f64).abs() < 1e-6;
         if self.duration() == 0.0 || in_step {
             shown
         } else {
-            (self.time as f64 * fps).round() as u32
+            (time as f64 * fps).round() as u32
         }
+    }
+
+    /// The frame index and time of the frame shown (before the first: those of the next).
+    pub fn shown_frame(&self) -> (u32, f32) {
+        self.halves
+            .first()
+            .and_then(|h| h.output.as_ref())
+            .map_or((self.index, self.time), |o| (o.index, o.time))
+    }
+
+    /// The camera of the frame shown: the user's, or the scene's at the shown frame's time.
+    pub fn shown_camera(&self) -> CameraSpec {
+        self.camera
+            .unwrap_or_else(|| camera::of_scene(&self.scene, self.shown_frame().1))
     }
 
     /// Writes each half's last frame into the output folder (`cfg.out`) as

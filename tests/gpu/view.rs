@@ -151,3 +151,44 @@ fn the_update_step_orbits_switches_splits_and_saves() {
     assert!(c.rel < 0.01, "{line}: {}{}", c.rel, c.images);
     println!("{line}\n{:.1} s", t0.elapsed().as_secs_f64());
 }
+
+/// Time: playing advances one frame a step, in step with the frame index (the command line's
+/// `--frames` is the index shown); scrubbing and pausing hold the time while the index goes
+/// on (`--frames` is then the time's frame), and the still frames get a flicker number.
+#[test]
+fn the_time_plays_scrubs_and_pauses() {
+    let t0 = std::time::Instant::now();
+    let mut s = start();
+    s.render.sequence.scene = Some("cornell-orbit".into());
+    s.render.sequence.size = Size {
+        width: 24,
+        height: 24,
+    };
+    s.render.vpls = 8;
+    let gpu = Arc::new(irad::gpu::Gpu::new(common::backend()).unwrap());
+    let mut app = App::new(gpu, &s).unwrap();
+    assert!(app.duration() > 1.0, "an animated scene");
+    let fps = app.cfg.sequence.fps;
+    app.apply(Input::Play(true)).unwrap();
+    app.step().unwrap();
+    app.step().unwrap();
+    assert!((app.time - 2.0 / fps).abs() < 1e-6, "{}", app.time);
+    assert_eq!(app.render_frame(), 1, "playing from 0: the index shown");
+    assert_eq!(app.halves[0].flicker.f1, None, "the scene moved");
+    app.apply(Input::Play(false)).unwrap();
+    app.apply(Input::Scrub(1.0)).unwrap();
+    app.step().unwrap();
+    app.step().unwrap();
+    assert_eq!(app.time, 1.0);
+    assert_eq!(app.index, 4);
+    assert_eq!(
+        app.render_frame(),
+        fps.round() as u32,
+        "the frame of time 1 s"
+    );
+    assert!(app.halves[0].flicker.f1.is_some(), "paused: a still frame");
+    // Past the end: kept within the animation.
+    app.apply(Input::Scrub(1e6)).unwrap();
+    assert_eq!(app.time, app.duration());
+    println!("{:.1} s", t0.elapsed().as_secs_f64());
+}
