@@ -27,6 +27,11 @@ pub enum Command {
     Bench(config::Bench),
     /// Error and flicker of an image sequence (folder of frame_FFFF.exr/.png) against a reference
     Metrics(config::Metrics),
+    /// Open a window that renders the scene continuously: orbit, pan and fly the camera,
+    /// play and scrub the time, switch scene, method, sampler and knobs; --split A,B shows two
+    /// samplers side by side with their live flicker (docs/view.md)
+    #[cfg(feature = "view")]
+    View(crate::view::View),
     /// Print the graphics adapters found and the one irad chooses
     Info {
         #[arg(long, value_enum, default_value_t = config::Render::default().backend)]
@@ -56,6 +61,8 @@ impl Command {
             Command::Compare(c) => c.validate(),
             Command::Bench(c) => c.validate(),
             Command::Metrics(c) => c.validate(),
+            #[cfg(feature = "view")]
+            Command::View(c) => c.validate(),
             Command::Info { .. } | Command::Scenes { .. } => Ok(()),
         }
     }
@@ -63,11 +70,18 @@ impl Command {
 
 /// Flags a subcommand takes through a settings type it shares with others but does not use:
 /// given, they are refused rather than silently ignored.
-const UNUSED: &[(&str, &[&str], &str)] = &[(
-    "bench",
-    &["vpls", "size", "frames", "overwrite", "components"],
-    "each --configs VPLS@WxH sets the VPL count and image size, and bench renders frames 0.. of its own into --out without cleaning it",
-)];
+const UNUSED: &[(&str, &[&str], &str)] = &[
+    (
+        "bench",
+        &["vpls", "size", "frames", "overwrite", "components"],
+        "each --configs VPLS@WxH sets the VPL count and image size, and bench renders frames 0.. of its own into --out without cleaning it",
+    ),
+    (
+        "view",
+        &["frames", "overwrite", "components"],
+        "the view plays the whole animation from time 0 (the slider scrubs it) and saves frames under new names in --out",
+    ),
+];
 
 /// Parses the command line (exiting with clap's message on an error), refusing the flags of
 /// [`UNUSED`].
@@ -141,6 +155,8 @@ pub fn run(cli: Cli) -> Result<()> {
         }
         Command::Compare(c) => commands::compare::compare(&c),
         Command::Bench(c) => commands::bench::bench(&c),
+        #[cfg(feature = "view")]
+        Command::View(v) => crate::view::view(&v),
         Command::Metrics(m) => {
             commands::metrics::metrics(&m.test, &m.reference, m.out.as_deref())?;
             match &m.scene {

@@ -99,12 +99,19 @@ impl Pipeline {
     /// Renders frame index `f` (the scene at time f / fps). With `components`, the direct and
     /// indirect images come back too.
     pub fn render_frame(&mut self, f: u32, components: bool) -> Result<FrameOutput> {
+        self.render_at(f, (f as f64 / self.fps as f64) as f32, components)
+    }
+
+    /// Renders the scene at `time` seconds as the sequence's frame index `f` (what the
+    /// sampler's state and random streams follow): an interactive view keeps drawing frames
+    /// f, f+1, ... while its time stands still.
+    pub fn render_at(&mut self, f: u32, time: f32, components: bool) -> Result<FrameOutput> {
         let s = &self.params;
         let start = Instant::now();
         let mut stages = Vec::new();
         let mut t = Instant::now();
         // 1. The scene at time t.
-        let frame = self.scene.at((f as f64 / self.fps as f64) as f32);
+        let frame = self.scene.at(time);
         lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
         self.tracer.update(&frame);

@@ -27,6 +27,7 @@ pub const LAYERS: &[&[&str]] = &[
     &["metrics"],
     &["report"],
     &["commands"],
+    &["view"],
     &["cli"],
     &["main"],
 ];

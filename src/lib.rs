@@ -23,4 +23,6 @@ pub mod report;
 pub mod resolve;
 pub mod scene;
 pub mod trace;
+#[cfg(feature = "view")]
+pub mod view;
 pub mod vpl;

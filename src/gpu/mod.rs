@@ -179,6 +179,34 @@ impl Gpu {
     /// Opens the preferred usable adapter for `choice`. A process opens one and shares it
     /// (`Arc<Gpu>`) with every pipeline.
     pub fn new(choice: BackendChoice) -> Result<Gpu> {
+        Ok(Self::open(&instance(choice.backends()), choice, None)?.0)
+    }
+
+    /// Opens the preferred usable adapter for `choice` that can also present to `window` (an
+    /// interactive view): the instance is told the display (`display`, e.g. winit's
+    /// `OwnedDisplayHandle`, which GL needs), and the surface comes back with the device and
+    /// what the surface takes on that adapter.
+    pub fn for_window(
+        choice: BackendChoice,
+        display: Box<dyn wgpu::wgt::WgpuHasDisplayHandle>,
+        window: impl Into<wgpu::SurfaceTarget<'static>>,
+    ) -> Result<(Gpu, wgpu::Surface<'static>, wgpu::SurfaceCapabilities)> {
+        let mut desc = wgpu::InstanceDescriptor::new_with_display_handle(display);
+        desc.backends = choice.backends();
+        let inst = wgpu::Instance::new(desc);
+        let surface = inst
+            .create_surface(window)
+            .map_err(|e| anyhow!("cannot make a drawing surface for the window: {e}"))?;
+        let (gpu, adapter) = Self::open(&inst, choice, Some(&surface))?;
+        let caps = surface.get_capabilities(&adapter);
+        Ok((gpu, surface, caps))
+    }
+
+    fn open(
+        inst: &wgpu::Instance,
+        choice: BackendChoice,
+        surface: Option<&wgpu::Surface>,
+    ) -> Result<(Gpu, wgpu::Adapter)> {
         // The library's own unit tests have no `main` to quiet Mesa first.
         #[cfg(test)]
         {
@@ -186,10 +214,13 @@ impl Gpu {
             QUIET.call_once(quiet_mesa_runtime_dir);
         }
         DEVICES_OPENED.with(|c| c.set(c.get() + 1));
-        let inst = instance(choice.backends());
         let mut list = pollster::block_on(inst.enumerate_adapters(choice.backends()));
         list.sort_by_key(|a| rank(&a.get_info()));
-        let Some(adapter) = list.into_iter().find(usable) else {
+        let presents = |a: &wgpu::Adapter| surface.is_none_or(|s| a.is_surface_supported(s));
+        let Some(adapter) = list.into_iter().find(|a| usable(a) && presents(a)) else {
+            if surface.is_some() {
+                bail!("no usable {choice:?} adapter can draw to the window ({NO_ADAPTER})");
+            }
             if choice == BackendChoice::Auto {
                 bail!(NO_ADAPTER);
             }
@@ -220,13 +251,14 @@ impl Gpu {
             let mut s = slot.lock().unwrap_or_else(|p| p.into_inner());
             s.get_or_insert_with(|| e.to_string());
         }));
-        Ok(Gpu {
+        let gpu = Gpu {
             errors,
             device,
             queue,
             adapter: AdapterDesc::of(&adapter.get_info()),
             limits,
-        })
+        };
+        Ok((gpu, adapter))
     }
 
     /// Builds a compute or render shader module from a pass's WGSL (with the common code).

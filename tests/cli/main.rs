@@ -9,3 +9,5 @@ mod cli;
 mod environment;
 mod report;
 mod runs;
+#[cfg(feature = "view")]
+mod view;

@@ -19,3 +19,5 @@ mod single_sided;
 mod temporal;
 mod textures;
 mod thin_gap;
+#[cfg(feature = "view")]
+mod view;

@@ -1,0 +1,695 @@
+//! The view's state and its update step, without a window: the settings (scene, method,
+//! sampler and knobs, VPL count, quality, size), the camera, the time, and one renderer state
+//! per half of the view (one, or two in the split view). [`App::apply`] takes an [`Input`];
+//! [`App::step`] renders the next frame of each half with the same [`Pipeline`] as
+//! `irad render`, and measures the frame rate, the passes' times and each half's live flicker.
+
+use super::camera;
+use crate::config::{self, CameraSpec, Method, Size};
+use crate::frame::{FrameOutput, Pipeline, SamplerKind};
+use crate::gpu::Gpu;
+use crate::image::Hdr;
+use crate::math::luminance;
+use crate::scene::Scene;
+use anyhow::{anyhow, Result};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// One change asked of the view (by the panel, the mouse and keys, or a test).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    /// Turn the eye about the target (degrees: yaw right, pitch up).
+    Orbit {
+        yaw: f32,
+        pitch: f32,
+    },
+    /// Slide the camera across the view (fractions of the view's height: right, up).
+    Pan {
+        dx: f32,
+        dy: f32,
+    },
+    /// Move toward the target (steps of a tenth of the distance; negative: away).
+    Dolly(f32),
+    /// Fly along the view's axes, in seconds of travel (the speed is a fifth of the scene's
+    /// size a second): forward, right, up.
+    Fly {
+        forward: f32,
+        right: f32,
+        up: f32,
+    },
+    /// Back to the scene's own camera (animated if it is).
+    ResetCamera,
+    Play(bool),
+    /// Set the time (seconds; kept within the animation).
+    Scrub(f32),
+    Scene(String),
+    Method(Method),
+    Sampler(SamplerKind),
+    /// The split view's second sampler (None: one view).
+    Split(Option<SamplerKind>),
+    Vpls(u32),
+    /// A sampler knob by name (see `config::KNOBS`).
+    Knob(&'static str, f64),
+    Aa(u32),
+    IsmSize(u32),
+    Exposure(f32),
+    /// A fixed render size (None: picked from the frame time, see [`AutoSize`]).
+    Size(Option<Size>),
+    /// Show each half's flicker as a heat map in place of its image.
+    Heat(bool),
+    /// Print the current view as `--camera EYE:TARGET:FOV` and the `irad render` command line
+    /// (stdout, and the panel's message).
+    CopyView,
+    /// Save each half's last frame (EXR and PNG) in the output folder.
+    SaveFrame,
+}
+
+/// How the render size follows the frame time when it is not fixed (docs/view.md): every
+/// [`AutoSize::EVERY`] frames, the height is scaled by sqrt(target / mean seconds the halves'
+/// rendering took; the window's drawing does not scale with the size and is left out) (the
+/// cost is about proportional to the pixels), clamped to 0.5..2 per change, to a multiple of
+/// 8 between [`AutoSize::MIN_HEIGHT`] and the room the window gives, and changed only when that
+/// moves it by 15% or more. The target is 10 frames a second on a software adapter
+/// (llvmpipe, lavapipe: device type Cpu) and 30 on a GPU; a software adapter starts at 128
+/// pixels high, a GPU at the room the window gives.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AutoSize {
+    pub target_s: f64,
+    pub max_height: u32,
+    /// Frame times since the last change (the first frame after a change, which builds the
+    /// renderer, is left out).
+    times: Vec<f64>,
+}
+
+impl AutoSize {
+    pub const EVERY: usize = 3;
+    pub const MIN_HEIGHT: u32 = 64;
+    pub const SOFTWARE_START: u32 = 128;
+
+    /// The rule for an adapter: software (`cpu`) or not, with `max_height` of room.
+    pub fn new(cpu: bool, max_height: u32) -> AutoSize {
+        AutoSize {
+            target_s: if cpu { 0.1 } else { 1.0 / 30.0 },
+            max_height: max_height.max(Self::MIN_HEIGHT),
+            times: Vec::new(),
+        }
+    }
+    /// The height to start at.
+    pub fn start(&self, cpu: bool) -> u32 {
+        if cpu {
+            Self::SOFTWARE_START.min(self.max_height)
+        } else {
+            self.max_height
+        }
+    }
+    /// Records a frame's seconds at `height`; the new height when the rule changes it.
+    pub fn record(&mut self, height: u32, seconds: f64, first_after_change: bool) -> Option<u32> {
+        if first_after_change {
+            return None;
+        }
+        self.times.push(seconds);
+        if self.times.len() < Self::EVERY {
+            return None;
+        }
+        let mean = self.times.iter().sum::<f64>() / self.times.len() as f64;
+        self.times.clear();
+        let scale = (self.target_s / mean.max(1e-6)).sqrt().clamp(0.5, 2.0);
+        let want = (height as f64 * scale / 8.0).round() as u32 * 8;
+        let want = want.clamp(Self::MIN_HEIGHT, self.max_height.max(Self::MIN_HEIGHT));
+        let moved = (want as f64 - height as f64).abs() >= 0.15 * height as f64;
+        (moved && want != height).then_some(want)
+    }
+}
+
+/// The live flicker of a half: the frame-to-frame change of its indirect light while nothing
+/// in the view moved (same camera, time and settings), F1 = mean over pixels of
+/// |lum(I_t) - lum(I_t-1)| (`irad metrics`' F1 against a still reference), also relative to
+/// the mean indirect luminance; and the mean of both over the still frames so far.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Flicker {
+    /// This frame's F1 (None: something moved, or the first frame).
+    pub f1: Option<f64>,
+    pub relative: Option<f64>,
+    /// Mean F1 and relative F1 over the still frames since the last change.
+    pub mean_f1: f64,
+    pub mean_relative: f64,
+    pub still_frames: u32,
+    /// Per pixel |lum(I_t) - lum(I_t-1)| of the last still frame.
+    pub map: Option<Vec<f32>>,
+}
+
+/// F1 between two indirect images, its mean-relative value and the per-pixel change.
+pub fn flicker_of(now: &Hdr, before: &Hdr) -> (f64, f64, Vec<f32>) {
+    let map: Vec<f32> = now
+        .data
+        .iter()
+        .zip(&before.data)
+        .map(|(a, b)| (luminance(*a) - luminance(*b)).abs())
+        .collect();
+    let n = map.len().max(1) as f64;
+    let f1 = map.iter().map(|&d| d as f64).sum::<f64>() / n;
+    let mean = now.data.iter().map(|c| luminance(*c) as f64).sum::<f64>() / n;
+    (f1, if mean > 0.0 { f1 / mean } else { 0.0 }, map)
+}
+
+/// A heat map of per-pixel change: black at 0, red, then yellow and white at `scale` and
+/// above (sRGB bytes, RGB).
+pub fn heat_map(map: &[f32], scale: f32) -> Vec<u8> {
+    let mut out = Vec::with_capacity(map.len() * 3);
+    for &d in map {
+        let x = (d / scale.max(1e-12)).clamp(0.0, 1.0) * 3.0;
+        let c = [
+            x.min(1.0),
+            (x - 1.0).clamp(0.0, 1.0),
+            (x - 2.0).clamp(0.0, 1.0),
+        ];
+        out.extend(c.iter().map(|v| (v * 255.0).round() as u8));
+    }
+    out
+}
+
+/// One half of the view: a sampler's own renderer state and its last frame.
+pub struct Half {
+    pub sampler: SamplerKind,
+    pipeline: Pipeline,
+    /// The last frame rendered (None before the first).
+    pub output: Option<FrameOutput>,
+    pub flicker: Flicker,
+    /// What the last frame saw (camera, time), to tell whether anything moved since.
+    seen: Option<(CameraSpec, f32)>,
+}
+
+/// What the view starts with.
+#[derive(Clone, Debug)]
+pub struct Start {
+    /// The render settings (`irad render`'s flags): scene, method, sampler, VPLs, quality.
+    pub render: config::Render,
+    /// The split view's second sampler.
+    pub split: Option<SamplerKind>,
+    /// Render at `render.sequence.size` always (else the size follows the frame time).
+    pub fixed_size: bool,
+}
+
+/// The view: settings, camera, time, and its halves' renderer states.
+pub struct App {
+    pub gpu: Arc<Gpu>,
+    /// The settings the halves render with (the left half's sampler in `sampler.kind`).
+    pub cfg: config::Render,
+    pub split: Option<SamplerKind>,
+    /// The scene as loaded (its own camera).
+    scene: Scene,
+    /// The camera the user moved to (None: the scene's own, animated if it is).
+    pub camera: Option<CameraSpec>,
+    pub time: f32,
+    pub playing: bool,
+    /// Frames drawn since start: the sampler's frame index (its random streams and history
+    /// follow it, also while time stands still).
+    pub index: u32,
+    pub halves: Vec<Half>,
+    /// The halves must be rebuilt before the next frame (settings changed).
+    rebuild: bool,
+    /// The frame after a rebuild (its time includes building the renderer).
+    first_after_build: bool,
+    pub auto: Option<AutoSize>,
+    pub heat: bool,
+    /// Seconds from one step to the next, the median of the last 15 (frame rate = 1 / this).
+    pub frame_seconds: f64,
+    /// Seconds the halves' rendering took, the median of the last 15 steps that did not
+    /// rebuild them (the rest of a frame is the window's: the controls, the copy to the
+    /// screen).
+    pub render_seconds: f64,
+    intervals: Vec<f64>,
+    render_times: Vec<f64>,
+    last_step: Option<Instant>,
+    /// What the view last said (a command line, a saved file, an error).
+    pub message: String,
+    /// The files the last `SaveFrame` wrote.
+    pub saved: Vec<PathBuf>,
+}
+
+impl App {
+    /// Loads the scene and builds the halves (checks the settings as `irad render` does).
+    pub fn new(gpu: Arc<Gpu>, start: &Start) -> Result<App> {
+        let mut cfg = start.render.clone();
+        cfg.validate()?;
+        // The view moves the camera itself: `--camera` is where it starts.
+        let camera = cfg.sequence.camera.take();
+        let scene = cfg.sequence.load_scene(config::DEFAULT_STILL_SCENE)?;
+        let cpu = is_software(&gpu);
+        let auto = (!start.fixed_size).then(|| {
+            let a = AutoSize::new(cpu, cfg.sequence.size.height);
+            cfg.sequence.size = sized(cfg.sequence.size, a.start(cpu));
+            a
+        });
+        let mut app = App {
+            gpu,
+            cfg,
+            split: start.split,
+            scene,
+            camera,
+            time: 0.0,
+            playing: false,
+            index: 0,
+            halves: Vec::new(),
+            rebuild: true,
+            first_after_build: true,
+            auto,
+            heat: false,
+            frame_seconds: 0.0,
+            render_seconds: 0.0,
+            intervals: Vec::new(),
+            render_times: Vec::new(),
+            last_step: None,
+            message: String::new(),
+            saved: Vec::new(),
+        };
+        app.build()?;
+        Ok(app)
+    }
+
+    /// The scene's length in seconds (0: still).
+    pub fn duration(&self) -> f32 {
+        self.scene.duration()
+    }
+
+    /// The samplers of the halves, left first.
+    pub fn samplers(&self) -> Vec<SamplerKind> {
+        let mut s = vec![self.cfg.sampler.kind];
+        s.extend(self.split);
+        s
+    }
+
+    /// The camera in use: the user's, or the scene's at the current time.
+    pub fn current_camera(&self) -> CameraSpec {
+        self.camera
+            .unwrap_or_else(|| camera::of_scene(&self.scene, self.time))
+    }
+
+    fn build(&mut self) -> Result<()> {
+        let mut halves = Vec::new();
+        for kind in self.samplers() {
+            let mut cfg = self.cfg.clone();
+            cfg.sampler.kind = kind;
+            let mut scene = self.scene.clone();
+            if let Some(c) = &self.camera {
+                c.apply(&mut scene)?;
+            }
+            halves.push(Half {
+                sampler: kind,
+                pipeline: Pipeline::new(self.gpu.clone(), scene, &cfg)?,
+                output: None,
+                flicker: Flicker::default(),
+                seen: None,
+            });
+        }
+        self.halves = halves;
+        self.rebuild = false;
+        self.first_after_build = true;
+        Ok(())
+    }
+
+    /// Applies one input. A change the settings refuse (a bad knob value, a scene that does
+    /// not load) leaves the view as it was and returns the error.
+    pub fn apply(&mut self, input: Input) -> Result<()> {
+        let cam = |app: &mut App, f: &dyn Fn(&mut CameraSpec)| {
+            let mut c = app.current_camera();
+            f(&mut c);
+            app.camera = Some(c);
+        };
+        let mut cfg = self.cfg.clone();
+        match input {
+            Input::Orbit { yaw, pitch } => cam(self, &|c| camera::orbit(c, yaw, pitch)),
+            Input::Pan { dx, dy } => cam(self, &|c| camera::pan(c, dx, dy)),
+            Input::Dolly(s) => cam(self, &|c| camera::dolly(c, s)),
+            Input::Fly { forward, right, up } => {
+                let (lo, hi) = self.scene.at(self.time).bounds();
+                let speed = 0.2 * (hi - lo).length().max(1e-3);
+                cam(self, &|c| {
+                    camera::fly(c, forward * speed, right * speed, up * speed)
+                })
+            }
+            Input::ResetCamera => {
+                self.camera = None;
+                self.rebuild = true;
+            }
+            Input::Play(p) => self.playing = p,
+            Input::Scrub(t) => self.time = t.clamp(0.0, self.duration()),
+            Input::Scene(spec) => {
+                cfg.sequence.scene = Some(spec);
+                let scene = cfg.sequence.load_scene(config::DEFAULT_STILL_SCENE)?;
+                self.scene = scene;
+                self.camera = None;
+                self.time = 0.0;
+                self.rebuild = true;
+            }
+            Input::Method(m) => cfg.method = m,
+            Input::Sampler(s) => cfg.sampler.kind = s,
+            Input::Split(s) => {
+                self.split = s;
+                self.rebuild = true;
+            }
+            Input::Vpls(v) => cfg.vpls = v,
+            Input::Knob(name, v) => {
+                let k = config::Knob::named(name).ok_or_else(|| anyhow!("no knob `{name}`"))?;
+                k.check(v)?;
+                k.set(&mut cfg.sampler.knobs, v);
+            }
+            Input::Aa(a) => cfg.quality.aa = a,
+            Input::IsmSize(s) => cfg.quality.ism_size = s,
+            Input::Exposure(e) => cfg.exposure = e,
+            Input::Size(s) => match s {
+                Some(s) => {
+                    cfg.sequence.size = s;
+                    self.auto = None;
+                }
+                None => {
+                    let cpu = is_software(&self.gpu);
+                    let a = AutoSize::new(cpu, cfg.sequence.size.height.max(256));
+                    cfg.sequence.size = sized(cfg.sequence.size, a.start(cpu));
+                    self.auto = Some(a);
+                }
+            },
+            Input::Heat(h) => self.heat = h,
+            Input::CopyView => {
+                let cam = camera::rounded(&self.shown_camera());
+                self.message = format!("--camera {cam}\n{}", self.command_line());
+                crate::outln!("{}", self.message)?;
+            }
+            Input::SaveFrame => {
+                self.saved = self.save_frame()?;
+                let names: Vec<String> =
+                    self.saved.iter().map(|p| p.display().to_string()).collect();
+                self.message = format!("wrote {}", names.join(", "));
+                crate::outln!("{}", self.message)?;
+            }
+        }
+        if !same_settings(&cfg, &self.cfg) {
+            cfg.validate()?;
+            self.cfg = cfg;
+            self.rebuild = true;
+        }
+        Ok(())
+    }
+
+    /// Renders the next frame of each half (rebuilding them first when the settings
+    /// changed), advances the time when playing, and measures.
+    pub fn step(&mut self) -> Result<()> {
+        if self.rebuild {
+            self.build()?;
+        }
+        let now = Instant::now();
+        if let Some(last) = self.last_step {
+            // The median of the last intervals: a frame that rebuilt the halves is not the
+            // rate.
+            self.intervals.push(now.duration_since(last).as_secs_f64());
+            if self.intervals.len() > 15 {
+                self.intervals.remove(0);
+            }
+            self.frame_seconds = median(&self.intervals);
+        }
+        self.last_step = Some(now);
+        let view = self.camera;
+        let seen = (self.current_camera(), self.time);
+        let started = Instant::now();
+        for h in &mut self.halves {
+            if let Some(c) = &view {
+                if h.seen.is_none_or(|(s, _)| s != *c) {
+                    c.apply(&mut h.pipeline.scene)?;
+                }
+            }
+            let out = h.pipeline.render_at(self.index, self.time, true)?;
+            let still = h.seen == Some(seen);
+            let before = h.output.as_ref().and_then(|o| o.image.indirect.as_ref());
+            match (out.image.indirect.as_ref(), before, still) {
+                (Some(now), Some(before), true) => {
+                    let (f1, rel, map) = flicker_of(now, before);
+                    let fl = &mut h.flicker;
+                    let n = fl.still_frames as f64;
+                    fl.mean_f1 = (fl.mean_f1 * n + f1) / (n + 1.0);
+                    fl.mean_relative = (fl.mean_relative * n + rel) / (n + 1.0);
+                    fl.still_frames += 1;
+                    fl.f1 = Some(f1);
+                    fl.relative = Some(rel);
+                    fl.map = Some(map);
+                }
+                _ => h.flicker = Flicker::default(),
+            }
+            h.seen = Some(seen);
+            h.output = Some(out);
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        let first = std::mem::replace(&mut self.first_after_build, false);
+        if !first {
+            self.render_times.push(seconds);
+            if self.render_times.len() > 15 {
+                self.render_times.remove(0);
+            }
+            self.render_seconds = median(&self.render_times);
+        }
+        let height = self.cfg.sequence.size.height;
+        if let Some(h) = self
+            .auto
+            .as_mut()
+            .and_then(|a| a.record(height, seconds, first))
+        {
+            self.cfg.sequence.size = sized(self.cfg.sequence.size, h);
+            self.rebuild = true;
+        }
+        self.index += 1;
+        if self.playing {
+            let d = self.duration();
+            self.time += 1.0 / self.cfg.sequence.fps;
+            if self.time > d {
+                self.time = 0.0;
+            }
+        }
+        Ok(())
+    }
+
+    /// The sRGB bytes (RGB) half `i` shows: its last frame, or its flicker heat map (with the
+    /// heat map on; black before the first still frame).
+    pub fn shown(&self, i: usize) -> Option<(u32, u32, Vec<u8>)> {
+        let h = self.halves.get(i)?;
+        let o = h.output.as_ref()?;
+        let (w, ht) = (o.image.hdr.width, o.image.hdr.height);
+        if self.heat {
+            // Full scale at 4 times the mean indirect luminance's 10%.
+            let ind = o.image.indirect.as_ref()?;
+            let mean = ind.mean();
+            let scale = 0.4 * luminance(mean).max(1e-6);
+            let bytes = match &h.flicker.map {
+                Some(m) => heat_map(m, scale),
+                None => vec![0; (w * ht * 3) as usize],
+            };
+            return Some((w, ht, bytes));
+        }
+        Some((w, ht, o.image.ldr.clone()))
+    }
+
+    /// The `irad render` command line of the frame shown and the settings (left half's
+    /// sampler), with `--camera` its camera and `--frames` as [`App::render_frame`] says.
+    pub fn command_line(&self) -> String {
+        let c = &self.cfg;
+        let mut a = vec!["irad".to_string(), "render".to_string()];
+        a.push(quote(c.sequence.scene_or(config::DEFAULT_STILL_SCENE)));
+        let cam = camera::rounded(&self.shown_camera());
+        a.push(format!("--camera {cam}"));
+        a.push(format!("--frames {}", self.render_frame()));
+        a.push(format!("--size {}", c.sequence.size));
+        if c.method != Method::Instant {
+            a.push(format!("--method {}", c.method.name()));
+        } else {
+            a.push(format!("--vpls {}", c.vpls));
+            a.push(format!("--sampler {}", c.sampler.kind.name()));
+            for k in config::KNOBS.iter() {
+                let v = k.get(&c.sampler.knobs);
+                if v != k.default() {
+                    if let Some(v) = v {
+                        a.push(format!("--{} {v}", k.name));
+                    }
+                }
+            }
+        }
+        let d = config::Render::default();
+        if let (Ok(q), Ok(dq)) = (
+            serde_json::to_value(&c.quality),
+            serde_json::to_value(&d.quality),
+        ) {
+            if let (Some(q), Some(dq)) = (q.as_object(), dq.as_object()) {
+                for (k, v) in q {
+                    if dq.get(k) != Some(v) {
+                        a.push(format!("--{} {v}", k.replace('_', "-")));
+                    }
+                }
+            }
+        }
+        if c.exposure != d.exposure {
+            a.push(format!("--exposure {}", c.exposure));
+        }
+        if let Some(cl) = c.clamp {
+            a.push(format!("--clamp {cl}"));
+        }
+        if c.sequence.fps != d.sequence.fps {
+            a.push(format!("--fps {}", c.sequence.fps));
+        }
+        if c.sequence.seed != d.sequence.seed {
+            a.push(format!("--seed {}", c.sequence.seed));
+        }
+        if let Some(e) = &c.sequence.environment {
+            a.push(format!("--environment {}", quote(&e.to_string())));
+        }
+        if c.backend != d.backend {
+            a.push(format!(
+                "--backend {}",
+                format!("{:?}", c.backend).to_lowercase()
+            ));
+        }
+        if c.sequence.allow_outside_paths {
+            a.push("--allow-outside-paths".into());
+        }
+        a.join(" ")
+    }
+
+    /// The frame `irad render --frames` is given for the view: the index of the frame shown
+    /// when the scene at that frame's time is the scene shown (a still scene, or time and
+    /// index in step, as while playing from the start), so that a sampler without history
+    /// (uniform, cdf, rejection) renders the same image; else the frame of the current time.
+    pub fn render_frame(&self) -> u32 {
+        let fps = self.cfg.sequence.fps as f64;
+        let (shown, time) = self.shown_frame();
+        let in_step = (shown as f64 / fps - time as f64).abs() < 1e-6;
+        if self.duration() == 0.0 || in_step {
+            shown
+        } else {
+            (time as f64 * fps).round() as u32
+        }
+    }
+
+    /// The frame index and time of the frame shown (before the first: those of the next).
+    pub fn shown_frame(&self) -> (u32, f32) {
+        self.halves
+            .first()
+            .and_then(|h| h.output.as_ref())
+            .map_or((self.index, self.time), |o| (o.index, o.time))
+    }
+
+    /// The camera of the frame shown: the user's, or the scene's at the shown frame's time.
+    pub fn shown_camera(&self) -> CameraSpec {
+        self.camera
+            .unwrap_or_else(|| camera::of_scene(&self.scene, self.shown_frame().1))
+    }
+
+    /// Writes each half's last frame into the output folder (`cfg.out`) as
+    /// `view_NNNN_SAMPLER.exr` and `.png`, NNNN the first number not yet used there.
+    pub fn save_frame(&self) -> Result<Vec<PathBuf>> {
+        let dir = &self.cfg.out;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow!("{}: cannot make the folder: {e}", dir.display()))?;
+        let taken = |n: u32| {
+            self.halves.iter().any(|h| {
+                dir.join(format!("view_{n:04}_{}.exr", h.sampler.name()))
+                    .exists()
+            })
+        };
+        let n = (0..).find(|&n| !taken(n)).expect("a free number");
+        let mut out = Vec::new();
+        for h in &self.halves {
+            let Some(o) = &h.output else {
+                anyhow::bail!("no frame rendered yet to save");
+            };
+            let stem = dir.join(format!("view_{n:04}_{}", h.sampler.name()));
+            let exr = stem.with_extension("exr");
+            let png = stem.with_extension("png");
+            o.image.hdr.write_exr(&exr)?;
+            let (w, ht) = (o.image.hdr.width, o.image.hdr.height);
+            let img = image::RgbImage::from_raw(w, ht, o.image.ldr.clone()).expect("w*h*3");
+            crate::image::write_bytes(&png, &crate::image::encode(&img, image::ImageFormat::Png)?)?;
+            out.push(exr);
+            out.push(png);
+        }
+        Ok(out)
+    }
+}
+
+/// The median of `v` (0 for none).
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// `size` with height `h` and the width that keeps its aspect (a multiple of 8, at least 8).
+fn sized(size: Size, h: u32) -> Size {
+    let w = (size.width as f64 * h as f64 / size.height as f64 / 8.0).round() as u32 * 8;
+    Size {
+        width: w.max(8),
+        height: h,
+    }
+}
+
+/// A word for a shell: quoted when it holds anything but letters, digits and `-_./,:`.
+fn quote(s: &str) -> String {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_./,:+".contains(c))
+    {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
+/// Whether two settings render the same (compared as their JSON records).
+fn same_settings(a: &config::Render, b: &config::Render) -> bool {
+    serde_json::to_value(a).ok() == serde_json::to_value(b).ok()
+}
+
+/// Whether `gpu` is a software adapter (llvmpipe, lavapipe).
+pub fn is_software(gpu: &Gpu) -> bool {
+    gpu.adapter.device_type == format!("{:?}", wgpu::DeviceType::Cpu)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_size_rule_scales_toward_the_target_and_holds_near_it() {
+        let mut a = AutoSize::new(true, 512);
+        assert_eq!(a.start(true), 128);
+        assert_eq!(a.start(false), 512);
+        // The first frame after a change is not counted.
+        assert_eq!(a.record(128, 10.0, true), None);
+        assert_eq!(a.record(128, 0.4, false), None);
+        assert_eq!(a.record(128, 0.4, false), None);
+        // 4x too slow: half the height.
+        assert_eq!(a.record(128, 0.4, false), Some(64));
+        // Within 15%: kept.
+        for _ in 0..2 {
+            assert_eq!(a.record(128, 0.09, false), None);
+        }
+        assert_eq!(a.record(128, 0.09, false), None);
+        // Far too fast: at most twice, at most the room.
+        for _ in 0..2 {
+            a.record(400, 0.001, false);
+        }
+        assert_eq!(a.record(400, 0.001, false), Some(512));
+    }
+
+    #[test]
+    fn flicker_and_heat_map_measure_the_change() {
+        let mut a = Hdr::new(2, 1);
+        a.data = vec![glam::Vec3::splat(1.0), glam::Vec3::splat(1.0)];
+        let mut b = a.clone();
+        b.data[0] = glam::Vec3::splat(0.5);
+        let (f1, rel, map) = flicker_of(&a, &b);
+        assert!(
+            (f1 - 0.25).abs() < 1e-6 && (rel - 0.25).abs() < 1e-6,
+            "{f1} {rel}"
+        );
+        assert_eq!(heat_map(&map, 0.5), vec![255, 255, 255, 0, 0, 0]);
+        assert_eq!(quote("cornell"), "cornell");
+        assert_eq!(quote("my scene.gltf"), "'my scene.gltf'");
+    }
+}

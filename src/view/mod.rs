@@ -1,0 +1,99 @@
+//! `irad view`: the scene rendered continuously in a window, with the same device and passes
+//! as `irad render` ([`crate::frame::Pipeline`]), the camera moved with the mouse and keys,
+//! and egui's controls beside it (docs/view.md). One file per concern: [`camera`] (orbit, pan,
+//! dolly, fly), [`app`] (the state and its update step, no window: what the tests drive),
+//! [`panel`] (the controls), [`window`] (winit, the surface, the event loop, screenshots).
+
+pub mod app;
+pub mod camera;
+pub mod panel;
+pub mod window;
+
+use crate::config;
+use crate::frame::SamplerKind;
+use anyhow::{bail, Result};
+use std::path::PathBuf;
+
+/// `irad view`'s settings: `irad render`'s, and the window's own.
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+pub struct View {
+    #[cfg_attr(feature = "cli", command(flatten))]
+    pub render: config::Render,
+    /// Start in the split view: the same camera and time rendered with samplers A (left) and
+    /// B (right), each with its own state, e.g. `cdf,mh` (overrides --sampler)
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "A,B", value_delimiter = ',', value_enum)
+    )]
+    pub split: Vec<SamplerKind>,
+    /// Render N frames, save the window's pixels (controls included) as this PNG and exit
+    #[cfg_attr(feature = "cli", arg(long, value_name = "FILE"))]
+    pub screenshot: Option<PathBuf>,
+    /// The frames rendered before --screenshot is taken
+    #[cfg_attr(feature = "cli", arg(long, value_name = "N", default_value_t = View::default().after))]
+    pub after: u32,
+    /// Render at --size always (else the size follows the measured frame time, at most
+    /// --size; see docs/view.md)
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub fixed_size: bool,
+    /// The window's size in pixels, WxH
+    #[cfg_attr(feature = "cli", arg(long, value_name = "WxH", default_value_t = View::default().window))]
+    pub window: config::Size,
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View {
+            render: config::Render::default(),
+            split: Vec::new(),
+            screenshot: None,
+            after: 10,
+            fixed_size: false,
+            window: config::Size {
+                width: 1024,
+                height: 640,
+            },
+        }
+    }
+}
+
+impl View {
+    pub fn validate(&self) -> Result<()> {
+        self.render.validate()?;
+        if !(self.split.is_empty() || self.split.len() == 2) {
+            bail!(
+                "`split` takes two samplers A,B (left and right), not {}",
+                self.split.len()
+            );
+        }
+        config::check::int("`after`", self.after, 1, 100_000)?;
+        if let Some(p) = &self.screenshot {
+            if p.extension().is_none_or(|e| !e.eq_ignore_ascii_case("png")) {
+                bail!("`screenshot` {}: the file must end in .png", p.display());
+            }
+        }
+        Ok(())
+    }
+
+    /// What the view starts with.
+    pub fn start(&self) -> app::Start {
+        let mut render = self.render.clone();
+        let mut split = None;
+        if let [a, b] = self.split[..] {
+            render.sampler.kind = a;
+            split = Some(b);
+        }
+        app::Start {
+            render,
+            split,
+            fixed_size: self.fixed_size,
+        }
+    }
+}
+
+/// `irad view`: opens the window and runs until it is closed (or the screenshot is taken).
+pub fn view(v: &View) -> Result<()> {
+    v.validate()?;
+    window::run(v)
+}
