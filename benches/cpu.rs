@@ -77,7 +77,7 @@ fn bench(c: &mut Criterion) {
         height: 256,
         knobs: irad::vpl::sampler::knobs::SamplerKnobs {
             camera_points: 256,
-            eps: 0.05,
+            eps: Some(0.05),
             mh_rate: 1.0,
             mh_follow: 0.0,
             mh_escape: 0,

@@ -39,7 +39,7 @@ fn params(
         height: size,
         knobs: SamplerKnobs {
             camera_points: 256,
-            eps: 0.05,
+            eps: Some(0.05),
             mh_rate: rate,
             mh_follow: 0.0,
             mh_escape: 8,

@@ -26,7 +26,7 @@ fn params(kind: SamplerKind, seed: u64) -> SamplerParams {
         height: H,
         knobs: SamplerKnobs {
             camera_points: 64,
-            eps: 0.05,
+            eps: Some(0.05),
             mh_rate: 1.0,
             mh_follow: 0.0,
             mh_escape: 0,

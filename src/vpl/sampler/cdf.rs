@@ -2,7 +2,7 @@
 //! candidates, weight `b / (N I) * (M / P)`.
 
 use super::common::{cdf_draw, weighted, Candidates};
-use super::{SamplerParams, Selection, VplSampler};
+use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -33,7 +33,7 @@ impl VplSampler for Cdf {
             p.seed,
             f,
             p.candidates,
-            p.knobs.eps,
+            p.knobs.eps(SamplerKind::Cdf),
             p.clamp,
         );
         if c.vpls.is_empty() {

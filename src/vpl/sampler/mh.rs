@@ -22,7 +22,7 @@
 //!   chains' states, so each frame's step is a lazy MH kernel that keeps that frame's target.
 
 use super::common::{cdf_draw, key, mh_accept, weighted, Candidates, Key};
-use super::{SamplerParams, Selection, VplSampler};
+use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -268,7 +268,15 @@ impl VplSampler for Mh {
             false,
         );
         let paths_s = t_pool.elapsed().as_secs_f64();
-        let pool = Candidates::of(vpls, paths, paths_s, tracer, &points, p.knobs.eps, p.clamp);
+        let pool = Candidates::of(
+            vpls,
+            paths,
+            paths_s,
+            tracer,
+            &points,
+            p.knobs.eps(SamplerKind::Mh),
+            p.clamp,
+        );
         let mut paths_s = pool.paths_s;
         if pool.vpls.is_empty() {
             self.chains.clear();

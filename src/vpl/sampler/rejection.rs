@@ -6,7 +6,7 @@
 //! expected image.
 
 use super::common::{fresh_paths, PATHS_PER_FRAME};
-use super::{SamplerParams, Selection, VplSampler};
+use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -64,7 +64,11 @@ impl VplSampler for Rejection {
                             .into_iter()
                             .filter_map(|v| {
                                 let i = importance(&v, &points, tracer, p.clamp);
-                                let q = keep_probability(i, target, p.knobs.eps);
+                                let q = keep_probability(
+                                    i,
+                                    target,
+                                    p.knobs.eps(SamplerKind::Rejection),
+                                );
                                 let u: f32 = rng(&[p.seed, id, v.depth as u64, 0x4e7]).random();
                                 (u < q).then_some((v, q))
                             })

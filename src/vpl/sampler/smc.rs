@@ -46,7 +46,7 @@
 //! measured on the other half.
 
 use super::common::{cdf_draw, Candidates, PATHS_PER_FRAME};
-use super::{SamplerParams, Selection, VplSampler};
+use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
@@ -279,7 +279,7 @@ fn newborns(
         p.seed,
         f,
         p.candidates,
-        p.knobs.eps,
+        p.knobs.eps(SamplerKind::Smc),
         p.clamp,
     );
     let mut out = Newborns {
