@@ -9,6 +9,7 @@ grey floor. Writes big_emissive.gltf + .bin + .png into the folder given (defaul
     farm-bench -n 3 -- target/release/irad scenes DIR/big_emissive.gltf
 """
 import json, math, os, struct, sys, zlib
+from gltf_buffer import Buffer, bounds
 
 out = sys.argv[1] if len(sys.argv) > 1 else "/tmp/irad-big-emissive"
 n = int(sys.argv[2]) if len(sys.argv) > 2 else 316
@@ -28,23 +29,9 @@ for j in range(n):
         idx += [a, b, d, a, d, c]  # wound to face -y
 floor_pos = [-2, 0, -2, 2, 0, -2, 2, 0, 2, -2, 0, 2]
 floor_idx = [0, 2, 1, 0, 3, 2]
-bin_ = bytearray()
-views, accessors = [], []
-
-def add(data, fmt, count, ty, comp, minmax=None):
-    while len(bin_) % 4:
-        bin_.append(0)
-    views.append({"buffer": 0, "byteOffset": len(bin_), "byteLength": struct.calcsize(fmt) * len(data)})
-    bin_.extend(struct.pack(f"<{len(data)}{fmt}", *data))
-    acc = {"bufferView": len(views) - 1, "count": count, "type": ty, "componentType": comp}
-    if minmax:
-        acc["min"], acc["max"] = minmax
-    accessors.append(acc)
-    return len(accessors) - 1
-
-def bounds(p):
-    xs, ys, zs = p[0::3], p[1::3], p[2::3]
-    return [min(xs), min(ys), min(zs)], [max(xs), max(ys), max(zs)]
+buf = Buffer()
+add = buf.add
+bin_, views, accessors = buf.bin, buf.views, buf.accessors
 
 p0 = add(pos, "f", len(pos) // 3, "VEC3", 5126, bounds(pos))
 t0 = add(uv, "f", len(uv) // 2, "VEC2", 5126)

@@ -11,6 +11,7 @@ court over 4 s (a glTF animation). Writes big_mesh.gltf + .bin into the folder g
     irad render DIR/big_mesh.gltf --size 256x256 --vpls 256 --frames 0..4 --out OUT
 """
 import json, math, os, struct, sys
+from gltf_buffer import Buffer, bounds
 
 out = sys.argv[1] if len(sys.argv) > 1 else "/tmp/irad-big-mesh"
 target = int(sys.argv[2]) if len(sys.argv) > 2 else 187_000
@@ -86,24 +87,9 @@ tris = len(idx) // 3
 light = [-2, H - 0.05, -1, 2, H - 0.05, -1, 2, H - 0.05, 1, -2, H - 0.05, 1]
 light_idx = [0, 1, 2, 0, 2, 3]  # faces down
 
-bin_ = bytearray()
-views, accessors = [], []
-
-def add(data, fmt, count, ty, comp, minmax=None, target=None):
-    while len(bin_) % 4:
-        bin_.append(0)
-    view = {"buffer": 0, "byteOffset": len(bin_), "byteLength": struct.calcsize(fmt) * len(data)}
-    views.append(view)
-    bin_.extend(struct.pack(f"<{len(data)}{fmt}", *data))
-    acc = {"bufferView": len(views) - 1, "count": count, "type": ty, "componentType": comp}
-    if minmax:
-        acc["min"], acc["max"] = minmax
-    accessors.append(acc)
-    return len(accessors) - 1
-
-def bounds(p):
-    xs, ys, zs = p[0::3], p[1::3], p[2::3]
-    return [min(xs), min(ys), min(zs)], [max(xs), max(ys), max(zs)]
+buf = Buffer()
+add = buf.add
+bin_, views, accessors = buf.bin, buf.views, buf.accessors
 
 p0 = add(pos, "f", len(pos) // 3, "VEC3", 5126, bounds(pos))
 i0 = add(idx, "I", len(idx), "SCALAR", 5125)

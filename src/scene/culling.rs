@@ -78,15 +78,7 @@ impl CullView {
     /// skipped ones left out.
     pub fn runs(&self, instances: &[Instance], count: u32) -> Vec<(Range<u32>, Draw)> {
         let mut runs: Vec<(Range<u32>, Draw)> = Vec::new();
-        let mut push = |r: Range<u32>, d: Draw| {
-            if r.is_empty() {
-                return;
-            }
-            match runs.last_mut() {
-                Some((last, e)) if *e == d && last.end == r.start => last.end = r.end,
-                _ => runs.push((r, d)),
-            }
-        };
+        let mut push = |r: Range<u32>, d: Draw| push_run(&mut runs, r, d);
         let mut at = 0;
         for i in instances {
             let r = i.tris.start.clamp(at, count)..i.tris.end.clamp(at, count);
@@ -108,15 +100,7 @@ impl CullView {
         count: u32,
     ) -> Vec<(Range<u32>, Draw)> {
         let mut runs: Vec<(Range<u32>, Draw)> = Vec::new();
-        let mut push = |r: Range<u32>, d: Draw| {
-            if r.is_empty() {
-                return;
-            }
-            match runs.last_mut() {
-                Some((last, e)) if *e == d && last.end == r.start => last.end = r.end,
-                _ => runs.push((r, d)),
-            }
-        };
+        let mut push = |r: Range<u32>, d: Draw| push_run(&mut runs, r, d);
         let mut at = 0;
         let mut last: Option<(usize, Draw)> = None;
         for (c, k) in &clusters.list {
@@ -292,6 +276,18 @@ fn find(parent: &mut [u32], mut v: u32) -> u32 {
         v = up;
     }
     v
+}
+
+/// Appends run `r` drawn as `d` to `runs`, merged into the last one when it is drawn alike
+/// and ends where `r` starts (an empty `r` adds nothing).
+fn push_run(runs: &mut Vec<(Range<u32>, Draw)>, r: Range<u32>, d: Draw) {
+    if r.is_empty() {
+        return;
+    }
+    match runs.last_mut() {
+        Some((last, e)) if *e == d && last.end == r.start => last.end = r.end,
+        _ => runs.push((r, d)),
+    }
 }
 
 #[cfg(test)]
