@@ -46,6 +46,9 @@ pub struct Pipeline {
     sampler: Sampler,
     /// The light's temporal gradient between frames (`--accumulate` with `--history gradient`).
     gradient: crate::vpl::gradient::LightGradient,
+    /// The last frame's emitter samples: the gradient is measured only when they or a vertex
+    /// moved.
+    last_lights: Vec<crate::scene::EmitterSample>,
 }
 
 impl Pipeline {
@@ -83,6 +86,7 @@ impl Pipeline {
             tracer,
             sampler,
             gradient: Default::default(),
+            last_lights: Vec::new(),
         })
     }
 
@@ -114,7 +118,7 @@ impl Pipeline {
         let frame = self.scene.at(time);
         lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
-        self.tracer.update(&frame);
+        let moved = self.tracer.update(&frame);
         lap(&mut stages, "bvh", &mut t);
         // 3-6. Camera points, light paths, importance and the sampler: the frame's VPLs and
         // their weights (none for a classical method: its solution gives the indirect light).
@@ -139,14 +143,19 @@ impl Pipeline {
             self.renderer.near_directions(),
         );
         lap(&mut stages, "ism_near", &mut t);
-        // The light's temporal gradient, for accumulation under a moving light or object.
+        // The light's temporal gradient, for accumulation under a moving light or object: only
+        // when a vertex or an emitter sample moved (else the history is used whole, and the
+        // last frame's probe paths are this frame's).
         let c = &self.renderer.config;
-        let gradient = if c.accumulate > 1 && c.history == crate::gpu::HistoryMode::Gradient {
-            self.gradient
-                .measure(&frame, &self.tracer, s.seed, (c.width, c.height), s.clamp)
-        } else {
-            None
-        };
+        let changed = moved || lights != self.last_lights || !self.gradient.primed();
+        let gradient =
+            if c.accumulate > 1 && c.history == crate::gpu::HistoryMode::Gradient && changed {
+                self.gradient
+                    .measure(&frame, &self.tracer, s.seed, (c.width, c.height), s.clamp)
+            } else {
+                None
+            };
+        self.last_lights.clone_from(&lights);
         lap(&mut stages, "gradient", &mut t);
         // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
         let image = self.renderer.render(

@@ -58,6 +58,11 @@ pub struct LightGradient {
 }
 
 impl LightGradient {
+    /// Whether a frame was measured (the next one can be compared with it).
+    pub fn primed(&self) -> bool {
+        self.last.is_some()
+    }
+
     /// Traces this frame's probe paths and measures the change against the last frame's (None
     /// for the first frame, or when no probe sees a surface).
     pub fn measure(
