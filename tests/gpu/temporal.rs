@@ -7,6 +7,7 @@
 use crate::common::{self, backend, mean_lum, rel_diff};
 use irad::config;
 use irad::frame::{Pipeline, SamplerKind};
+use irad::gpu::renderer::Reuse;
 use irad::gpu::HistoryMode;
 use irad::image::Hdr;
 use irad::scene::builtin;
@@ -56,12 +57,10 @@ fn pipeline_with(
 
 /// Frames `0..n`: each one's indirect light and whether it used the last frame's history.
 fn indirect(p: &mut Pipeline, n: u32) -> Vec<(Hdr, bool)> {
-    (0..n)
-        .map(|f| {
-            let out = p.render_frame(f, true).unwrap();
-            let kept = out.image.reused.history_kept;
-            (out.image.indirect.unwrap(), kept)
-        })
+    let frames: Vec<u32> = (0..n).collect();
+    indirect_at(p, &frames)
+        .into_iter()
+        .map(|(img, reused)| (img, reused.history_kept))
         .collect()
 }
 
@@ -183,14 +182,13 @@ fn a_moving_camera_reprojects_the_history() {
 }
 
 /// The frames `frames` of `p` (any order: the history follows the order rendered): each one's
-/// indirect light, and whether its history was weighed by the light's gradient.
-fn indirect_at(p: &mut Pipeline, frames: &[u32]) -> Vec<(Hdr, bool)> {
+/// indirect light and what it reused of the last frame.
+fn indirect_at(p: &mut Pipeline, frames: &[u32]) -> Vec<(Hdr, Reuse)> {
     frames
         .iter()
         .map(|&f| {
             let out = p.render_frame(f, true).unwrap();
-            let tested = out.image.reused.history_tested;
-            (out.image.indirect.unwrap(), tested)
+            (out.image.indirect.unwrap(), out.image.reused)
         })
         .collect()
 }
@@ -207,7 +205,7 @@ fn indirect_at(p: &mut Pipeline, frames: &[u32]) -> Vec<(Hdr, bool)> {
 fn the_gradient_keeps_a_slow_lights_history_and_drops_a_jump() {
     let frames = [0, 1, 2, 3, 4, 5, 36];
     let size = 48;
-    let run = |vpls: u32, acc: (u32, HistoryMode)| {
+    let run = |vpls: u32, acc: (u32, HistoryMode)| -> Vec<(Hdr, Reuse)> {
         indirect_at(
             &mut pipeline_with("cornell-light", size, (SamplerKind::Uniform, 4, vpls), acc),
             &frames,
@@ -218,9 +216,13 @@ fn the_gradient_keeps_a_slow_lights_history_and_drops_a_jump() {
     let tested = run(64, (8, HistoryMode::Gradient));
     let kept = run(64, (8, HistoryMode::Keep));
     for k in 1..frames.len() {
-        assert!(tested[k].1, "frame {}: history not weighed", frames[k]);
+        assert!(
+            tested[k].1.history_tested,
+            "frame {}: history not weighed",
+            frames[k]
+        );
     }
-    let d = |x: &[(Hdr, bool)], k: usize| rel_diff(&x[k].0, &truth[k].0);
+    let d = |x: &[(Hdr, Reuse)], k: usize| rel_diff(&x[k].0, &truth[k].0);
     for (k, f) in frames.iter().enumerate() {
         println!(
             "frame {f}: |indirect - 2048 VPLs| / mean: alone {:.4}, gradient {:.4}, kept {:.4}",
@@ -230,7 +232,7 @@ fn the_gradient_keeps_a_slow_lights_history_and_drops_a_jump() {
         );
     }
     let (slow, jump) = (5, 6);
-    let save = |name: &str, k: usize, x: &[(Hdr, bool)]| {
+    let save = |name: &str, k: usize, x: &[(Hdr, Reuse)]| {
         common::save_images(TEST, name, &x[k].0, &truth[k].0)
     };
     // Measured on lavapipe: frame 5 at 0.45 of the frame's own error; frame 36 at 0.96 of
