@@ -187,6 +187,7 @@ impl Compare {
         Render {
             sequence: self.sequence.clone(),
             method: Method::Instant,
+            meshing: Default::default(),
             vpls,
             clamp: r.clamp,
             sampler: SamplerConfig {

@@ -47,6 +47,11 @@ pub struct Render {
     /// lights are still)
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().method))]
     pub method: Method,
+    /// Classical radiosity's elements: uniform, adaptive (split where neighbours differ, solve
+    /// again), or discontinuity (cut along the direct light's shadow and penumbra boundaries
+    /// first, then adaptive; progressive and stochastic)
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().meshing))]
+    pub meshing: crate::radiosity::Meshing,
     /// VPL slots per frame
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true))]
     pub vpls: u32,
@@ -156,6 +161,7 @@ impl Default for Render {
         Render {
             sequence: Sequence::default(),
             method: Method::Instant,
+            meshing: crate::radiosity::Meshing::Adaptive,
             vpls: 256,
             clamp: None,
             sampler: SamplerConfig::default(),
