@@ -587,6 +587,38 @@ mod tests {
         assert!(e.contains("--camera needs --scene"), "{e}");
     }
 
+    /// A plan's arguments are the study's without the cluster's flags, in either form.
+    #[test]
+    fn a_plans_arguments_leave_out_the_cluster_flags() {
+        let args: Vec<String> = [
+            "cornell",
+            "--size",
+            "8x8",
+            "--plan",
+            "d",
+            "--gres=none",
+            "--chunk-frames",
+            "3",
+            "--out",
+            "o",
+            "--max-running=2",
+            "--cpus-per-job",
+            "1",
+            "--spp",
+            "4",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            study_args(&args),
+            ["cornell", "--size", "8x8", "--out", "o", "--spp", "4"]
+        );
+        let e = error(&["compare", "--plan", "d", "--collect", "d"]);
+        assert!(e.contains("--collect"), "{e}");
+        let e = error(&["compare", "--chunk-frames", "0"]);
+        assert!(e.starts_with("--chunk-frames 0"), "{e}");
+    }
+
     #[test]
     fn the_failures_the_review_found_are_refused_for_the_right_reason() {
         assert!(error(&["reference", "--exposure", "nan"]).contains("--exposure NaN"));

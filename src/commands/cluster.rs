@@ -323,6 +323,21 @@ fn write_plan(
 /// ask for the same resources, so the CPU and the GPU jobs are two arrays; the array indices
 /// are the plan's job indices (the CPU jobs come first).
 fn write_slurm(dir: &Path, plan: &PlanFile, cluster: &config::Cluster) -> Result<()> {
+    // An #SBATCH line ends its value at white space, and has no quoting.
+    for (what, p) in [
+        ("plan's folder", dir),
+        ("current folder", plan.cwd.as_path()),
+    ] {
+        let text = p.display().to_string();
+        if text
+            .chars()
+            .any(|c| c.is_whitespace() || c == '"' || c == '\'')
+        {
+            bail!(
+                "{text}: the {what} has a space or quote in its path, which Slurm's #SBATCH lines cannot hold; choose another"
+            );
+        }
+    }
     let irad = format!("\"${{IRAD:-{}}}\"", plan.binary.display());
     let d = dir.display().to_string();
     let header = |name: &str, what: &str| {
@@ -542,14 +557,29 @@ pub fn run_job(dir: &Path, plan: &PlanFile, study: &Study, index: usize) -> Resu
                 _ => unreachable!("a compare has its plan"),
             };
             let seq = config::Sequence { seed: *seed, ..seq };
-            let pb = crate::report::progress((b - a) as u64 * seq.size.height as u64, &job.name);
+            // A compare's frames already in its reference cache (seen from this machine) are
+            // copied, as a compare on one machine reuses them.
+            let cached: Vec<u32> = match (&compare, half) {
+                (Some(p), Some(h)) => (*a..*b)
+                    .filter(|&f| copy_cached(&p.cache.join(h), &folder, f, seq.size))
+                    .collect(),
+                _ => Vec::new(),
+            };
+            if !cached.is_empty() {
+                crate::outln!(
+                    "job {index}: {} from the reference cache",
+                    crate::report::count(cached.len() as u64, "frame", "frames")
+                )?;
+            }
+            let todo = (b - a) as usize - cached.len();
+            let pb = crate::report::progress(todo as u64 * seq.size.height as u64, &job.name);
             let mut t = std::time::Instant::now();
             crate::commands::reference::trace_walking(
                 &scene,
                 &seq,
                 *spp,
-                numbers.iter().copied().take_while(|&f| f < *b),
-                &|f| (*a..*b).contains(&f),
+                numbers.iter().copied().take_while(|&f| f < *b && todo > 0),
+                &|f| (*a..*b).contains(&f) && !cached.contains(&f),
                 &|| pb.inc(1),
                 &mut |f, time, img| {
                     crate::report::write_frame(&folder, f, &img, exposure)?;
@@ -600,6 +630,28 @@ pub fn run_job(dir: &Path, plan: &PlanFile, study: &Study, index: usize) -> Resu
     crate::report::write_json(&done_path(dir, index), &done)?;
     crate::outln!("job {index} ({}): done in {:.1} s", job.name, done.seconds)?;
     Ok(Outcome::Ran)
+}
+
+/// Copies reference frame `f` from the cache folder `from` into `to` when the cache holds it
+/// whole and of `size` (its EXR and PNG); whether it did.
+fn copy_cached(from: &Path, to: &Path, f: u32, size: config::Size) -> bool {
+    let stem = crate::report::frame_stem(f);
+    let (exr, png) = (
+        from.join(format!("{stem}.exr")),
+        from.join(format!("{stem}.png")),
+    );
+    let usable = png.is_file()
+        && Hdr::read(&exr).is_ok_and(|i| (i.width, i.height) == (size.width, size.height));
+    usable
+        && [exr, png].iter().all(|src| {
+            let dst = to.join(src.file_name().expect("a file"));
+            crate::image::atomic_write(&dst, |tmp| {
+                std::fs::copy(src, tmp)
+                    .map(|_| ())
+                    .map_err(anyhow::Error::from)
+            })
+            .is_ok()
+        })
 }
 
 /// Removes what an earlier try of a job left half-written: the temporaries of its frames.

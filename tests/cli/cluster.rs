@@ -295,6 +295,19 @@ fn a_planned_compare_collects_to_the_single_machine_compare() {
             assert!(std::fs::read(cc.join(&name)).unwrap() == single, "{name}");
         }
     }
+    // Another study of the same reference: its chunks copy the cached frames.
+    let mut other = vec!["compare"];
+    other.extend(STUDY);
+    other.extend(["--samplers", "cdf", "--out", "other", "--cache", "cache-c"]);
+    other.extend(["--plan", "plan2", "--chunk-frames", "2"]);
+    ok("plan 2", irad_in(&root, &other));
+    let said = ok("plan 2 job 4", irad_in(&root, &["job", "plan2", "4"]));
+    assert!(said.contains("2 frames from the reference cache"), "{said}");
+    let name = "b/frame_0003.exr";
+    assert!(
+        std::fs::read(root.join("plan2/reference").join(name)).unwrap()
+            == std::fs::read(cs.join(name)).unwrap()
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
 
