@@ -411,3 +411,64 @@ fn a_plan_asks_for_a_gpu_and_keeps_to_its_folder() {
     assert!(e.contains("--gres 'gpu;rm'"), "{e}");
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// A job killed (SIGKILL) after its first frame, then run again, writes the frames of one
+/// uninterrupted trace. About 8 s on 2 cores.
+#[test]
+fn a_killed_job_is_redone_to_the_same_frames() {
+    let root = fresh_dir("cluster-kill");
+    std::fs::create_dir_all(&root).unwrap();
+    let study = [
+        "cornell-box",
+        "--size",
+        "48x48",
+        "--frames",
+        "0..3",
+        "--spp",
+        "256",
+    ];
+    let mut plan = vec!["reference"];
+    plan.extend(study);
+    plan.extend(["--plan", "plan", "--chunk-frames", "3"]);
+    ok("plan", irad_in(&root, &plan));
+    let mut job = irad_command()
+        .current_dir(&root)
+        .args(["job", "plan", "0"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let first = root.join("plan/reference/frame_0000.exr");
+    let start = std::time::Instant::now();
+    while !first.exists() {
+        assert!(start.elapsed().as_secs() < 120, "no first frame");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    job.kill().unwrap();
+    job.wait().unwrap();
+    assert!(
+        !root.join("plan/done/0000.json").exists(),
+        "the job finished before it was killed: make it slower"
+    );
+    assert!(!root.join("plan/reference/frame_0002.exr").exists());
+    let e = fails(
+        "collect",
+        irad_in(&root, &["reference", "--collect", "plan"]),
+    );
+    assert!(e.contains("job 0 (reference frames 0..3): no "), "{e}");
+    let said = ok("job again", irad_in(&root, &["job", "plan", "0"]));
+    assert!(said.contains("done in"), "{said}");
+    let mut single = vec!["reference"];
+    single.extend(study);
+    single.extend(["--out", "single"]);
+    ok("single", irad_in(&root, &single));
+    for f in 0..3 {
+        let name = format!("frame_{f:04}.exr");
+        assert!(
+            std::fs::read(root.join("plan/reference").join(&name)).unwrap()
+                == std::fs::read(root.join("single").join(&name)).unwrap(),
+            "{name}"
+        );
+    }
+    std::fs::remove_dir_all(&root).unwrap();
+}
