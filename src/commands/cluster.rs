@@ -290,10 +290,14 @@ fn write_plan(
         chunk_frames: cluster.chunk_frames,
         jobs,
     };
-    if let Ok(old) = read_plan(&dir) {
-        if old.jobs != plan.jobs || old.args != plan.args || old.cwd != plan.cwd {
+    // The same plan again keeps its finished jobs; another one would take their markers
+    // for its own.
+    if dir.join(PLAN_FILE).exists() {
+        let same = read_plan(&dir)
+            .is_ok_and(|old| old.jobs == plan.jobs && old.args == plan.args && old.cwd == plan.cwd);
+        if !same {
             bail!(
-                "{}: holds another study's plan; name an empty folder, or remove this one",
+                "{}: holds another study's plan (or one of another irad); name an empty folder, or remove this one",
                 dir.join(PLAN_FILE).display()
             );
         }

@@ -404,6 +404,13 @@ fn a_plan_asks_for_a_gpu_and_keeps_to_its_folder() {
     other[6] = "4";
     let e = fails("another plan", irad_in(&root, &other));
     assert!(e.contains("holds another study's plan"), "{e}");
+    // So is a folder whose plan this irad cannot read (its markers are not this plan's).
+    std::fs::create_dir_all(root.join("old/done")).unwrap();
+    std::fs::write(root.join("old/plan.json"), r#"{"irad": "0.0.1"}"#).unwrap();
+    let mut old = args.to_vec();
+    old[12] = "old";
+    let e = fails("old plan", irad_in(&root, &old));
+    assert!(e.contains("holds another study's plan"), "{e}");
     let e = fails(
         "bad gres",
         irad_in(&root, &["compare", "--plan", "p2", "--gres", "gpu;rm"]),
