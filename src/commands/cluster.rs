@@ -776,7 +776,9 @@ pub fn collect_compare(cfg: &config::Compare, dir: &Path, plan_file: &PlanFile) 
         Some(&motion),
     )?;
     let mut adapters: Vec<String> = Vec::new();
-    let mut measured = Vec::new();
+    // Each run measured as it is read: one run's frames in memory at a time (besides the
+    // shown runs', which the page needs).
+    let mut results = runs::Results::new(String::new());
     for (i, spec) in plan.runs().into_iter().enumerate() {
         let job = plan_file
             .jobs
@@ -813,15 +815,12 @@ pub fn collect_compare(cfg: &config::Compare, dir: &Path, plan_file: &PlanFile) 
                 adapters.push(a);
             }
         }
-        measured.push((spec, rendered));
-    }
-    let mut results = runs::Results::new(adapters.join("; "));
-    for (spec, rendered) in measured {
         results.push(
             spec,
             runs::measure(&plan, &reference.frames, &motion, spec, rendered)?,
         );
     }
+    results.adapter = adapters.join("; ");
     outputs::write(&plan, &reference.frames, &floor, &results)
 }
 
