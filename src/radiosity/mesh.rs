@@ -2,8 +2,9 @@
 //! LEPP refinement). A split always cuts an edge in every element that holds it, so the mesh
 //! stays conforming: no element has a vertex in the middle of a neighbour's edge (no
 //! T-vertices), and Gouraud shading at shared vertices has no cracks. Elements keep the scene
-//! triangle they came from. Discontinuity meshing was not attempted; shadow boundaries are
-//! followed by adaptive refinement only ([`Mesh::refine_adaptive`]).
+//! triangle they came from. Shadow boundaries are followed by adaptive refinement
+//! ([`Mesh::refine_adaptive`]) and, with discontinuity meshing, by cuts along them first
+//! ([`Mesh::cut`], lines from [`super::discontinuity`]).
 
 use crate::scene::Frame;
 use glam::Vec3;
