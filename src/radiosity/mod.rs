@@ -340,17 +340,20 @@ pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution 
 /// the lines and the vertices the cuts added.
 pub fn first_mesh(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> (Mesh, usize, usize) {
     let mut mesh = Mesh::from_frame(frame);
-    // The lines are cut into the scene's own triangles, and the pieces refined from there,
-    // so the element budget holds for every meshing.
+    let cuts = s.meshing == Meshing::Discontinuity && s.solver != Solver::Hierarchical;
+    if s.solver == Solver::Progressive || cuts {
+        mesh.refine_to(PATCH_SIZE * s.element_size, s.max_elements);
+    }
+    if s.solver == Solver::Progressive {
+        mesh.mark_patches();
+    }
+    // The lines are cut into the patches (pieces at most a patch long), and the pieces
+    // refined from there, so the element budget holds for every meshing.
     let (mut lines, mut cut) = (0, 0);
-    if s.meshing == Meshing::Discontinuity && s.solver != Solver::Hierarchical {
+    if cuts {
         let found = discontinuity::lines(frame, tracer, s.element_size);
         lines = found.len();
         cut = mesh.cut(&found, CUT_SNAP * s.element_size);
-    }
-    if s.solver == Solver::Progressive {
-        mesh.refine_to(PATCH_SIZE * s.element_size, s.max_elements);
-        mesh.mark_patches();
     }
     mesh.refine_to(s.element_size, s.max_elements);
     (mesh, lines, cut)
