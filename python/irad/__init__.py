@@ -62,19 +62,26 @@ class Frame:
     indirect: Optional[np.ndarray] = None
 
 
+def _bad(argument: str, text: str) -> SettingsError:
+    """A SettingsError naming ``argument``."""
+    e = SettingsError(f"{argument}: {text}")
+    e.argument = argument
+    return e
+
+
 def _frames_value(frames: FramesArg) -> Optional[str]:
     if frames is None:
         return None
     if isinstance(frames, range):
         if frames.step != 1:
-            raise SettingsError("frames: a range of consecutive frames (step 1)")
+            raise _bad("frames", "a range of consecutive frames (step 1)")
         return f"{frames.start}..{frames.stop}"
     if isinstance(frames, (tuple, list)):
         if len(frames) != 2:
-            raise SettingsError("frames: (start, end), a range, N or 'A..B'")
+            raise _bad("frames", "(start, end), a range, N or 'A..B'")
         return f"{int(frames[0])}..{int(frames[1])}"
     if isinstance(frames, bool):
-        raise SettingsError("frames: (start, end), a range, N or 'A..B'")
+        raise _bad("frames", "(start, end), a range, N or 'A..B'")
     return str(frames)
 
 
@@ -90,9 +97,7 @@ def _camera_value(camera: Any) -> str:
             repr(float(fov)),
         )
     except (TypeError, ValueError):
-        raise SettingsError(
-            "camera: (eye, target, fov) or 'x,y,z:x,y,z:fov'"
-        ) from None
+        raise _bad("camera", "(eye, target, fov) or 'x,y,z:x,y,z:fov'") from None
 
 
 def _args(settings: Dict[str, Any]) -> List[str]:
@@ -111,7 +116,7 @@ def _args(settings: Dict[str, Any]) -> List[str]:
             value = _camera_value(value)
         elif name == "size" and isinstance(value, (tuple, list)):
             if len(value) != 2:
-                raise SettingsError("size: (width, height) or 'WxH'")
+                raise _bad("size", "(width, height) or 'WxH'")
             value = f"{value[0]}x{value[1]}"
         elif isinstance(value, (list, tuple)):
             value = ",".join(str(v) for v in value)
@@ -234,13 +239,15 @@ def compare(scene: SceneArg = None, **settings: Any) -> CompareTable:
 
 
 def _summary(run: Dict[str, Any]) -> Dict[str, Any]:
-    """A run of metrics.json as one flat row: its scalars and its metrics' means."""
+    """A run of metrics.json as one flat row: its scalars, its metrics' means (``mean_rel_mse``,
+    ``flicker_f1``, ...) and its warped flicker's (``warped_f1``, ``warped_kept``); the per-frame
+    lists are in :attr:`CompareTable.frames`."""
     row: Dict[str, Any] = {}
     for k, v in run.items():
         if isinstance(v, dict):
             for k2, v2 in v.items():
                 if not isinstance(v2, (list, dict)):
-                    row[f"{k}.{k2}" if k2 in row else k2] = v2
+                    row[k2 if k == "metrics" else f"{k}_{k2}"] = v2
         elif not isinstance(v, list):
             row[k] = v
     return row

@@ -30,11 +30,17 @@ __all__ = [
 ]
 
 
+def _bad(argument: str, text: str) -> Exception:
+    from . import _bad
+
+    return _bad(argument, text)
+
+
 def _image(a: Any, what: str) -> np.ndarray:
     a = np.ascontiguousarray(a, dtype=np.float32)
     if a.ndim != 3 or a.shape[2] != 3:
-        raise _irad.SettingsError(
-            f"{what}: an image is H x W x 3 (linear RGB), not shape {a.shape}"
+        raise _bad(
+            what, f"an image is H x W x 3 (linear RGB), not shape {a.shape}"
         )
     return a
 
@@ -50,8 +56,8 @@ def _images(x: Images, what: str) -> Tuple[Optional[List[int]], List[np.ndarray]
     if isinstance(x, np.ndarray) and x.ndim == 4:
         return None, [_image(i, what) for i in x]
     if isinstance(x, np.ndarray):
-        raise _irad.SettingsError(
-            f"{what}: frames are a folder, a list of H x W x 3 arrays or an N x H x W x 3 array, not shape {x.shape}"
+        raise _bad(
+            what, f"frames are a folder, a list of H x W x 3 arrays or an N x H x W x 3 array, not shape {x.shape}"
         )
     return None, [_image(i, what) for i in x]
 
@@ -66,15 +72,15 @@ def _pair(
         by_number = dict(zip(rn, r))
         missing = [n for n in tn if n not in by_number]
         if missing:
-            raise _irad.SettingsError(
-                f"reference: frame {missing[0]} of test has no counterpart"
+            raise _bad(
+                "reference", f"frame {missing[0]} of test has no counterpart"
             )
         r = [by_number[n] for n in tn]
         rn = tn
     numbers = list(frames) if frames is not None else (tn or rn or list(range(len(t))))
     if len(t) != len(r) or len(numbers) != len(t) or not t:
-        raise _irad.SettingsError(
-            f"reference: {len(t)} test frames, {len(r)} reference frames and {len(numbers)} frame numbers"
+        raise _bad(
+            "reference", f"{len(t)} test frames, {len(r)} reference frames and {len(numbers)} frame numbers"
         )
     return numbers, t, r
 

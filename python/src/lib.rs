@@ -55,7 +55,10 @@ fn setting_names() -> std::collections::HashSet<String> {
             }
         }
     }
-    names.insert("scene".into());
+    // The arguments of the metrics functions that no flag has.
+    for n in ["scene", "test", "reference", "halves", "image"] {
+        names.insert(n.into());
+    }
     names
 }
 
@@ -534,7 +537,7 @@ fn same_sizes(t: &[Hdr], r: &[Hdr]) -> anyhow::Result<()> {
     for (i, (a, b)) in t.iter().zip(r).enumerate() {
         if (a.width, a.height) != (b.width, b.height) {
             anyhow::bail!(
-                "`test` frame {i} is {}x{} but `reference` frame {i} is {}x{}",
+                "image sizes differ: `test` frame {i} is {}x{} but `reference` frame {i} is {}x{}",
                 a.width,
                 a.height,
                 b.width,
@@ -637,6 +640,7 @@ fn frame_error(
 ) -> PyResult<String> {
     let (t, r) = (to_hdr(&test, "test")?, to_hdr(&reference, "reference")?);
     guard(py, || {
+        same_sizes(std::slice::from_ref(&t), std::slice::from_ref(&r))?;
         Ok(serde_json::to_string(&irad::metrics::frame_error(&t, &r)?)?)
     })
 }
@@ -649,7 +653,10 @@ fn flip(
     reference: PyReadonlyArray3<'_, f32>,
 ) -> PyResult<f64> {
     let (t, r) = (to_hdr(&test, "test")?, to_hdr(&reference, "reference")?);
-    guard(py, || irad::metrics::flip(&t, &r))
+    guard(py, || {
+        same_sizes(std::slice::from_ref(&t), std::slice::from_ref(&r))?;
+        irad::metrics::flip(&t, &r)
+    })
 }
 
 /// `irad compare` with `args`: writes its outputs into `out` and returns that folder.
