@@ -45,12 +45,8 @@ def _image(a: Any, what: str) -> np.ndarray:
     return a
 
 
-def _is_folder(x: Any) -> bool:
-    return isinstance(x, (str, os.PathLike))
-
-
 def _images(x: Images, what: str) -> Tuple[Optional[List[int]], List[np.ndarray]]:
-    if _is_folder(x):
+    if isinstance(x, (str, os.PathLike)):
         numbers, paths = _irad.list_frames(os.fspath(x))
         return list(numbers), [_irad.read_image(p) for p in paths]
     if isinstance(x, np.ndarray) and x.ndim == 4:
@@ -90,7 +86,8 @@ def sequence(
 ) -> Dict[str, Any]:
     """``irad metrics TEST REFERENCE``: per frame relMSE, RMSE, bias, FLIP and flicker, and their
     means, flicker F1 and RMS, temporal variance and bias (the fields of its metrics.json)."""
-    if _is_folder(test) and _is_folder(reference) and frames is None:
+    folder = (str, os.PathLike)
+    if isinstance(test, folder) and isinstance(reference, folder) and frames is None:
         _, m = _irad.metrics_folders(os.fspath(test), os.fspath(reference))
         return json.loads(m)
     numbers, t, r = _pair(test, reference, frames)
@@ -113,10 +110,11 @@ def warped(
 
     numbers, t, r = _pair(test, reference, frames)
     cam = None if camera is None else _camera_value(camera)
+    s = _scene(scene)
+    if s is None:
+        raise _bad("scene", "warped flicker needs the scene the frames show")
     return json.loads(
-        _irad.metrics_warped(
-            numbers, t, r, _scene(scene), float(fps), cam, allow_outside_paths
-        )
+        _irad.metrics_warped(numbers, t, r, s, float(fps), cam, allow_outside_paths)
     )
 
 
