@@ -123,7 +123,8 @@ def _args(settings: Dict[str, Any]) -> List[str]:
         elif isinstance(value, os.PathLike):
             value = os.fspath(value)
         elif isinstance(value, float):
-            value = repr(value)
+            # (numpy's float64 is a float whose repr is "np.float64(...)")
+            value = repr(float(value))
         out += [flag, str(value)]
     return out
 

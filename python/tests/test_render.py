@@ -47,6 +47,13 @@ def test_a_loaded_scene_renders_as_its_name():
     assert np.array_equal(a[0].image, b[0].image)
 
 
+def test_numpy_scalars_are_settings_like_python_numbers():
+    a = irad.render("cornell", frames=np.int64(0), size=(np.int32(16), 16), vpls=np.int32(8),
+                    clamp=np.float64(0.05))
+    b = irad.render("cornell", frames=0, size=(16, 16), vpls=8, clamp=0.05)
+    assert np.array_equal(a[0].image, b[0].image)
+
+
 def test_scene_info_is_what_irad_scenes_prints():
     scene = irad.Scene.load("cornell-orbit")
     info = scene.info()
