@@ -460,6 +460,9 @@ fn reference<'py>(
         None => guard(py, || seq.load_scene(config::DEFAULT_STILL_SCENE))?,
     };
     let frames = seq.frames_or_first();
+    // Ctrl-C between frames: Python's signal handlers run (briefly taking the GIL after each
+    // frame) and a KeyboardInterrupt ends the trace.
+    let mut interrupt: Option<PyErr> = None;
     let images = guard(py, || {
         let mut images = Vec::new();
         irad::commands::reference::trace_frames(
@@ -470,11 +473,19 @@ fn reference<'py>(
             &|| {},
             &mut |f, t, img| {
                 images.push((f, t, img));
+                if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    interrupt = Some(e);
+                    anyhow::bail!("interrupted");
+                }
                 Ok(())
             },
         )?;
         Ok(images)
-    })?;
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    let images = images?;
     Ok(images
         .into_iter()
         .map(|(f, t, img)| (f, t, to_array(py, img)))

@@ -59,3 +59,15 @@ def test_reference_and_metrics_name_their_arguments():
         irad.metrics.warped([img, img], [img, img], "cornell", fps=0)
     with pytest.raises(ValueError, match="reference"):
         irad.metrics.sequence([img, img], [img])
+
+
+def test_ctrl_c_stops_a_reference_between_frames():
+    import os, signal, threading, time
+
+    timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.time()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        # About 0.03 s a frame here: 2000 frames would take a minute.
+        irad.reference("cornell-orbit", frames=range(0, 2000), spp=1, size=(32, 32))
+    assert time.time() - start < 10
