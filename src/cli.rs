@@ -23,6 +23,14 @@ pub enum Command {
     Reference(config::Reference),
     /// Samplers x VPL counts on one animation against a cached reference: metrics, charts, report.html
     Compare(config::Compare),
+    /// Run job INDEX of the plan in DIR (written by `irad compare/reference --plan DIR`),
+    /// unless it has finished; a job cut short is redone (docs/cluster.md)
+    Job {
+        /// The plan's folder
+        dir: PathBuf,
+        /// The job's index in DIR/plan.json (a Slurm array's $SLURM_ARRAY_TASK_ID)
+        index: usize,
+    },
     /// Time whole frames per stage (CPU stages and GPU passes) for several VPL counts and sizes
     Bench(config::Bench),
     /// Error and flicker of an image sequence (folder of frame_FFFF.exr/.png) against a reference
@@ -63,7 +71,7 @@ impl Command {
             Command::Metrics(c) => c.validate(),
             #[cfg(feature = "view")]
             Command::View(c) => c.validate(),
-            Command::Info { .. } | Command::Scenes { .. } => Ok(()),
+            Command::Info { .. } | Command::Scenes { .. } | Command::Job { .. } => Ok(()),
         }
     }
 }
@@ -103,7 +111,130 @@ pub fn parse() -> Cli {
             }
         }
     }
+    // --collect DIR takes the study from DIR/plan.json: another flag would be ignored.
+    for sub in ["compare", "reference"] {
+        let Some(m) = matches.subcommand_matches(sub) else {
+            continue;
+        };
+        if m.value_source("collect") != Some(clap::parser::ValueSource::CommandLine) {
+            continue;
+        }
+        let cmd = Cli::command();
+        let args: Vec<String> = cmd
+            .find_subcommand(sub)
+            .map(|c| c.get_arguments().map(|a| a.get_id().to_string()).collect())
+            .unwrap_or_default();
+        for id in m.ids() {
+            if id != "collect"
+                && args.iter().any(|a| a == id.as_str())
+                && m.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine)
+            {
+                Cli::command()
+                    .error(
+                        clap::error::ErrorKind::ArgumentConflict,
+                        format!(
+                            "--{} is not used with --collect: the study's settings are the plan's (DIR/plan.json)",
+                            id.as_str().replace('_', "-")
+                        ),
+                    )
+                    .exit();
+            }
+        }
+    }
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
+/// The flags of [`config::Cluster`] (each takes a value).
+fn cluster_flags() -> Vec<String> {
+    use clap::Args;
+    config::Cluster::augment_args(clap::Command::new("cluster"))
+        .get_arguments()
+        .filter_map(|a| a.get_long().map(|l| format!("--{l}")))
+        .collect()
+}
+
+/// The arguments of a subcommand without the cluster's flags: `irad COMMAND ARGS` is the
+/// study on one machine.
+pub fn study_args(args: &[String]) -> Vec<String> {
+    let flags = cluster_flags();
+    let mut out = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if a == "--" {
+            out.push(a.clone());
+            out.extend(it.by_ref().cloned());
+            break;
+        }
+        if flags.iter().any(|f| f == a) {
+            it.next();
+            continue;
+        }
+        if flags.iter().any(|f| a.starts_with(&format!("{f}="))) {
+            continue;
+        }
+        out.push(a.clone());
+    }
+    out
+}
+
+/// The study a plan was written from: its arguments parsed as `irad COMMAND ARGS`, in the
+/// folder they were given in (made the current one: jobs and --collect run there).
+pub fn study_of(
+    plan: &crate::commands::cluster::PlanFile,
+) -> Result<crate::commands::cluster::Study> {
+    use crate::commands::cluster::Study;
+    std::env::set_current_dir(&plan.cwd).map_err(|e| {
+        anyhow::anyhow!(
+            "{}: cannot enter the folder the plan was written in ({e}): the plan's paths are relative to it",
+            plan.cwd.display()
+        )
+    })?;
+    let argv = ["irad".to_string(), plan.command.clone()]
+        .into_iter()
+        .chain(plan.args.iter().cloned());
+    let cli = Cli::try_parse_from(argv).map_err(|e| {
+        anyhow::anyhow!(
+            "the plan's arguments `{}` do not parse: {}",
+            plan.args.join(" "),
+            e.render()
+        )
+    })?;
+    cli.command.validate()?;
+    // The chunks are the plan's.
+    match cli.command {
+        Command::Compare(mut c) => {
+            c.cluster.chunk_frames = plan.chunk_frames;
+            Ok(Study::Compare(Box::new(c)))
+        }
+        Command::Reference(mut r) => {
+            r.cluster.chunk_frames = plan.chunk_frames;
+            Ok(Study::Reference(Box::new(r)))
+        }
+        _ => anyhow::bail!(
+            "a plan's command is compare or reference, not {}",
+            plan.command
+        ),
+    }
+}
+
+/// The command line's arguments after the subcommand's name.
+fn subcommand_args() -> Vec<String> {
+    std::env::args().skip(2).collect()
+}
+
+/// Reads the plan in `dir` and its study (entering the plan's folder of origin); returns the
+/// plan's folder made absolute first.
+fn open_plan(
+    dir: &std::path::Path,
+) -> Result<(
+    PathBuf,
+    crate::commands::cluster::PlanFile,
+    crate::commands::cluster::Study,
+)> {
+    let dir = std::path::absolute(dir)?;
+    let plan = crate::commands::cluster::read_plan(&dir)?;
+    let study = study_of(&plan)?;
+    Ok((dir, plan, study))
 }
 
 /// An error as the command line reports it: each setting the library names (`` `ism_size` ``)
@@ -150,10 +281,48 @@ pub fn run(cli: Cli) -> Result<()> {
             commands::render::render(&c).map(|_| ())
         }
         Command::Reference(c) => {
+            if let Some(dir) = &c.cluster.plan {
+                let args = study_args(&subcommand_args());
+                return commands::cluster::plan_reference(&c, dir, args).map(|_| ());
+            }
+            if let Some(dir) = &c.cluster.collect {
+                let (dir, plan, study) = open_plan(dir)?;
+                let commands::cluster::Study::Reference(r) = study else {
+                    anyhow::bail!(
+                        "{}: a plan of `irad {}`: collect it with `irad {} --collect`",
+                        dir.display(),
+                        plan.command,
+                        plan.command
+                    );
+                };
+                return commands::cluster::collect_reference(&r, &dir, &plan);
+            }
             crate::interrupt::install()?;
             commands::reference::reference(&c).map(|_| ())
         }
-        Command::Compare(c) => commands::compare::compare(&c),
+        Command::Compare(c) => {
+            if let Some(dir) = &c.cluster.plan {
+                let args = study_args(&subcommand_args());
+                return commands::cluster::plan_compare(&c, dir, args).map(|_| ());
+            }
+            if let Some(dir) = &c.cluster.collect {
+                let (dir, plan, study) = open_plan(dir)?;
+                let commands::cluster::Study::Compare(c) = study else {
+                    anyhow::bail!(
+                        "{}: a plan of `irad {}`: collect it with `irad {} --collect`",
+                        dir.display(),
+                        plan.command,
+                        plan.command
+                    );
+                };
+                return commands::cluster::collect_compare(&c, &dir, &plan);
+            }
+            commands::compare::compare(&c)
+        }
+        Command::Job { dir, index } => {
+            let (dir, plan, study) = open_plan(&dir)?;
+            commands::cluster::run_job(&dir, &plan, &study, index).map(|_| ())
+        }
         Command::Bench(c) => commands::bench::bench(&c),
         #[cfg(feature = "view")]
         Command::View(v) => crate::view::view(&v),
@@ -416,6 +585,38 @@ mod tests {
         assert_eq!(c.fov_deg, 20.0);
         let e = error(&["metrics", "a", "b", "--camera", "0,0,1:0,0,0:40"]);
         assert!(e.contains("--camera needs --scene"), "{e}");
+    }
+
+    /// A plan's arguments are the study's without the cluster's flags, in either form.
+    #[test]
+    fn a_plans_arguments_leave_out_the_cluster_flags() {
+        let args: Vec<String> = [
+            "cornell",
+            "--size",
+            "8x8",
+            "--plan",
+            "d",
+            "--gres=none",
+            "--chunk-frames",
+            "3",
+            "--out",
+            "o",
+            "--max-running=2",
+            "--cpus-per-job",
+            "1",
+            "--spp",
+            "4",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            study_args(&args),
+            ["cornell", "--size", "8x8", "--out", "o", "--spp", "4"]
+        );
+        let e = error(&["compare", "--plan", "d", "--collect", "d"]);
+        assert!(e.contains("--collect"), "{e}");
+        let e = error(&["compare", "--chunk-frames", "0"]);
+        assert!(e.starts_with("--chunk-frames 0"), "{e}");
     }
 
     #[test]

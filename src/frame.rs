@@ -30,6 +30,9 @@ pub struct FrameOutput {
     /// A classical method's solver: whether this frame solved (else it reused the last
     /// solution); None for instant radiosity.
     pub solved: Option<bool>,
+    /// The solve's figures (elements, discontinuity lines, rays, seconds), in the frame that
+    /// solved.
+    pub radiosity: Option<radiosity::Stats>,
 }
 
 /// The renderer of one sequence: scene, ray tracer, sampler state and GPU passes, on a
@@ -170,9 +173,9 @@ impl Pipeline {
             components,
         )?;
         stages.extend(image.timings.iter().map(|&(n, t)| (n, t)));
-        let (image, solved) = match &mut self.classical {
+        let (image, solved, radiosity) = match &mut self.classical {
             Some(c) => {
-                let (image, solved) = c.add_indirect(
+                let (image, stats) = c.add_indirect(
                     image,
                     &frame,
                     &self.tracer,
@@ -180,9 +183,9 @@ impl Pipeline {
                     components,
                     &mut stages,
                 )?;
-                (image, Some(solved))
+                (image, Some(stats.is_some()), stats)
             }
-            None => (image, None),
+            None => (image, None, None),
         };
         // Emitter edges box-filtered by camera rays (CPU), in place of the sub-samples' steps.
         let mut image = image;
@@ -238,6 +241,7 @@ impl Pipeline {
             stages,
             seconds: start.elapsed().as_secs_f64(),
             solved,
+            radiosity,
         })
     }
 }
@@ -263,7 +267,7 @@ impl Classical {
         renderer: &Renderer,
         components: bool,
         stages: &mut Vec<(&'static str, f64)>,
-    ) -> Result<(RenderedImage, bool)> {
+    ) -> Result<(RenderedImage, Option<radiosity::Stats>)> {
         let mut t = Instant::now();
         let (solution, solved) = self
             .cache
@@ -284,6 +288,6 @@ impl Classical {
             image.indirect = Some(indirect);
         }
         lap(stages, "radiosity_display", &mut t);
-        Ok((image, solved))
+        Ok((image, solved.then(|| solution.stats.clone())))
     }
 }

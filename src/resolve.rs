@@ -344,6 +344,7 @@ pub fn radiosity_settings(
     let (lo, hi) = scene.at(0.0).bounds();
     crate::radiosity::RadiositySettings {
         solver,
+        meshing: cfg.meshing,
         // 0.15 in the Cornell box, whose bounding-box diagonal is 3.46.
         element_size: 0.0433 * (hi - lo).length(),
         seed: cfg.sequence.seed,

@@ -32,6 +32,7 @@ pub fn is_closed_pipe(e: &anyhow::Error) -> bool {
 }
 
 pub mod bench;
+pub mod cluster;
 pub mod compare;
 pub mod metrics;
 pub mod reference;

@@ -9,24 +9,25 @@ use serde::Serialize;
 use std::time::Instant;
 
 #[derive(Serialize)]
-struct ReferenceRun<'a> {
-    command: &'static str,
-    scene: &'a str,
+pub(crate) struct ReferenceRun<'a> {
+    pub command: &'static str,
+    pub scene: &'a str,
     /// The environment that lit the run (see `irad render`'s run.json).
-    environment: Option<String>,
-    settings: &'a config::Reference,
-    frames: Vec<ReferenceFrame>,
-    threads: usize,
+    pub environment: Option<String>,
+    pub settings: &'a config::Reference,
+    pub frames: Vec<ReferenceFrame>,
+    pub threads: usize,
     /// Whether a signal stopped the run before its last frame.
-    interrupted: bool,
+    pub interrupted: bool,
 }
 
-#[derive(Serialize)]
-struct ReferenceFrame {
-    frame: u32,
-    time: f32,
-    seconds: f64,
-    mean_rgb: [f32; 3],
+/// One traced frame, as run.json records it.
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
+pub struct ReferenceFrame {
+    pub frame: u32,
+    pub time: f32,
+    pub seconds: f64,
+    pub mean_rgb: [f32; 3],
 }
 
 /// The reference renderer's parameters for a sequence and spp.
@@ -49,15 +50,37 @@ pub fn trace_frames(
     tick: &(dyn Fn() + Sync),
     done: &mut dyn FnMut(u32, f32, Hdr) -> Result<()>,
 ) -> Result<()> {
+    trace_walking(scene, seq, spp, frames, &|_| true, tick, done)
+}
+
+/// Path-traces the frames of `walk` that are `wanted`, with the tracer updated through every
+/// frame of `walk` (in order) as if all were traced: an image depends only on the seed, the
+/// pixel and the tracer, and the tracer's state (its scale, offsets and the split of moving
+/// triangles) on the frames it was built and updated with. So any subset of a sequence, traced
+/// by walking it from its first frame, is bit-identical to the same frames of the whole
+/// sequence traced at once: what lets a reference be cached frame by frame and split into
+/// chunks that run on other machines (see `docs/cluster.md`).
+pub fn trace_walking(
+    scene: &crate::scene::Scene,
+    seq: &config::Sequence,
+    spp: u32,
+    walk: impl IntoIterator<Item = u32>,
+    wanted: &dyn Fn(u32) -> bool,
+    tick: &(dyn Fn() + Sync),
+    done: &mut dyn FnMut(u32, f32, Hdr) -> Result<()>,
+) -> Result<()> {
     let p = params(seq, spp);
     let mut tracer: Option<Tracer> = None;
-    for f in frames {
+    for f in walk {
         let frame = scene.at(seq.time(f));
         match &mut tracer {
             Some(t) => {
                 t.update(&frame);
             }
             None => tracer = Some(Tracer::new(&frame)),
+        }
+        if !wanted(f) {
+            continue;
         }
         let img = crate::reference::render(&frame, tracer.as_ref().expect("set above"), &p, tick);
         done(f, frame.time, img)?;

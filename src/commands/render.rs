@@ -44,6 +44,9 @@ pub struct FrameRecord {
     pub profiling: crate::gpu::Profiling,
     /// A classical method: whether this frame solved (else it reused the solution).
     pub radiosity_solved: Option<bool>,
+    /// The classical solve's figures, in the frame that solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radiosity: Option<crate::radiosity::Stats>,
 }
 
 impl FrameRecord {
@@ -67,6 +70,7 @@ impl FrameRecord {
             drawn: fo.image.drawn,
             profiling: fo.image.profiling,
             radiosity_solved: fo.solved,
+            radiosity: fo.radiosity.clone(),
         }
     }
 }

@@ -44,6 +44,10 @@ pub struct Compare {
     /// --ism-size, --backend, --exposure, ...)
     #[cfg_attr(feature = "cli", command(flatten))]
     pub render: CompareRender,
+    /// Past one machine: --plan DIR, --collect DIR (docs/cluster.md)
+    #[cfg_attr(feature = "cli", command(flatten))]
+    #[serde(skip)]
+    pub cluster: Cluster,
 }
 
 /// `--sweep SAMPLER:KNOB=V1,V2,...`: the runs of one sampler at each value of one knob.
@@ -162,6 +166,7 @@ impl Default for Compare {
             show_vpls: None,
             sweep: Vec::new(),
             render: CompareRender::default(),
+            cluster: Cluster::default(),
         }
     }
 }
@@ -187,6 +192,7 @@ impl Compare {
         Render {
             sequence: self.sequence.clone(),
             method: Method::Instant,
+            meshing: Default::default(),
             vpls,
             clamp: r.clamp,
             sampler: SamplerConfig {
@@ -213,6 +219,7 @@ impl Compare {
 
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
+        self.cluster.validate()?;
         if self.methods.is_empty() {
             bail!("`methods` needs at least one method");
         }

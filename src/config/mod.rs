@@ -21,12 +21,14 @@ use std::path::PathBuf;
 
 pub use crate::check;
 
+mod cluster;
 mod compare;
 mod metrics;
 mod sequence;
 
 pub use crate::gpu::{Quality, MAX_SIZE};
 pub use crate::vpl::sampler::SamplerConfig;
+pub use cluster::Cluster;
 pub use compare::*;
 pub use metrics::Metrics;
 pub use sequence::*;
@@ -47,6 +49,11 @@ pub struct Render {
     /// lights are still)
     #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().method))]
     pub method: Method,
+    /// Classical radiosity's elements: uniform, adaptive (split where neighbours differ, solve
+    /// again), or discontinuity (cut along the direct light's shadow and penumbra boundaries
+    /// first, then adaptive; progressive and stochastic)
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = Render::default().meshing))]
+    pub meshing: crate::radiosity::Meshing,
     /// VPL slots per frame
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Render::default().vpls, allow_hyphen_values = true))]
     pub vpls: u32,
@@ -156,6 +163,7 @@ impl Default for Render {
         Render {
             sequence: Sequence::default(),
             method: Method::Instant,
+            meshing: crate::radiosity::Meshing::Adaptive,
             vpls: 256,
             clamp: None,
             sampler: SamplerConfig::default(),
@@ -218,6 +226,10 @@ pub struct Reference {
     /// Exposure of the PNG previews (the EXR files are linear, unscaled)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().exposure, allow_hyphen_values = true))]
     pub exposure: f32,
+    /// Past one machine: --plan DIR, --collect DIR (docs/cluster.md)
+    #[cfg_attr(feature = "cli", command(flatten))]
+    #[serde(skip)]
+    pub cluster: Cluster,
 }
 
 /// The scene `irad reference` and `irad bench` use when none is named.
@@ -232,6 +244,7 @@ impl Default for Reference {
             out: PathBuf::from("out/reference"),
             overwrite: false,
             exposure: 1.0,
+            cluster: Cluster::default(),
         }
     }
 }
@@ -240,6 +253,7 @@ impl Reference {
     pub fn validate(&self) -> Result<()> {
         self.sequence.validate()?;
         self.settings().validate()?;
+        self.cluster.validate()?;
         check_exposure(self.exposure)
     }
 

@@ -7,6 +7,7 @@
 //! the direct light of the punctual lights ([`punctual_direct`]), which have no area to be
 //! elements of: it enters the solve as reflected light still to be shot. See docs/radiosity.md.
 
+pub mod discontinuity;
 pub mod display;
 pub mod form_factor;
 pub mod hemicube;
@@ -47,6 +48,21 @@ impl Solver {
     }
 }
 
+/// `--meshing`: how the elements are laid out before and between solves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum Meshing {
+    /// Elements of the element size, no refinement
+    Uniform,
+    /// Elements of the element size, split where neighbours differ and solved again
+    #[default]
+    Adaptive,
+    /// As adaptive, with the elements first cut along the direct light's shadow and penumbra
+    /// boundaries (discontinuity meshing; progressive and stochastic)
+    Discontinuity,
+}
+
 /// What a solve cost and how far it got.
 #[derive(Clone, Debug, Default, Serialize, PartialEq)]
 pub struct Stats {
@@ -62,6 +78,9 @@ pub struct Stats {
     pub rays: u64,
     /// Adaptive refinement rounds run.
     pub refinements: usize,
+    /// Discontinuity lines the mesh was cut along, and the vertices the cuts added.
+    pub discontinuities: usize,
+    pub cut_vertices: usize,
     /// Unshot (or last update's) power over the source power (emitted plus the punctual
     /// lights' direct light) when the solve stopped.
     pub residual: f32,
@@ -222,6 +241,7 @@ pub(crate) fn ambient(mesh: &Mesh, rho: &[Vec3], unshot: &[Vec3]) -> Vec<Vec3> {
 #[derive(Clone, Debug, Serialize)]
 pub struct RadiositySettings {
     pub solver: Solver,
+    pub meshing: Meshing,
     /// Initial element size (longest edge), in scene units.
     pub element_size: f32,
     /// Most elements the mesh may hold (adaptive refinement stops there).
@@ -241,6 +261,7 @@ impl Default for RadiositySettings {
     fn default() -> Self {
         RadiositySettings {
             solver: Solver::Progressive,
+            meshing: Meshing::Adaptive,
             element_size: 0.15,
             max_elements: 6000,
             refine_rounds: 2,
@@ -263,6 +284,10 @@ impl RadiositySettings {
         crate::check::int("`rays`", self.rays, 1, 1 << 32)
     }
 }
+
+/// A discontinuity line passes through an element's vertex, rather than cutting a sliver off,
+/// within this many element sizes of it.
+const CUT_SNAP: f32 = 0.1;
 
 /// Progressive refinement's patches, in element sizes.
 const PATCH_SIZE: f32 = 4.0;
@@ -310,6 +335,27 @@ pub fn solve(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> Solution 
     solve_with(frame, tracer, s, &|_| {})
 }
 
+/// The mesh a solve starts from: elements of the element size (progressive refinement's in
+/// patches), cut along the discontinuity lines with `--meshing discontinuity`. Returns it,
+/// the lines and the vertices the cuts added.
+pub fn first_mesh(frame: &Frame, tracer: &Tracer, s: &RadiositySettings) -> (Mesh, usize, usize) {
+    let mut mesh = Mesh::from_frame(frame);
+    // The lines are cut into the scene's own triangles, and the pieces refined from there,
+    // so the element budget holds for every meshing.
+    let (mut lines, mut cut) = (0, 0);
+    if s.meshing == Meshing::Discontinuity && s.solver != Solver::Hierarchical {
+        let found = discontinuity::lines(frame, tracer, s.element_size);
+        lines = found.len();
+        cut = mesh.cut(&found, CUT_SNAP * s.element_size);
+    }
+    if s.solver == Solver::Progressive {
+        mesh.refine_to(PATCH_SIZE * s.element_size, s.max_elements);
+        mesh.mark_patches();
+    }
+    mesh.refine_to(s.element_size, s.max_elements);
+    (mesh, lines, cut)
+}
+
 /// [`solve`], telling `progress` how far it has got.
 pub fn solve_with(
     frame: &Frame,
@@ -327,15 +373,11 @@ pub fn solve_with(
     } else {
         tracer
     };
-    let mut mesh = if s.solver == Solver::Progressive {
-        Mesh::uniform_with_patches(
-            frame,
-            PATCH_SIZE * s.element_size,
-            s.element_size,
-            s.max_elements,
-        )
+    let (mut mesh, discontinuities, cut_vertices) = first_mesh(frame, tracer, s);
+    let refine_rounds = if s.meshing == Meshing::Uniform {
+        0
     } else {
-        Mesh::uniform(frame, s.element_size, s.max_elements)
+        s.refine_rounds
     };
     let mut rounds = 0;
     let mut stats_rays = 0;
@@ -344,7 +386,7 @@ pub fn solve_with(
         let last = if s.solver == Solver::Hierarchical {
             0
         } else {
-            s.refine_rounds
+            refine_rounds
         };
         let tell = |fraction: f32| {
             progress(&SolveProgress {
@@ -379,7 +421,7 @@ pub fn solve_with(
         }
         tell(1.0);
         stats_rays += sol.stats.rays;
-        if rounds >= s.refine_rounds || s.solver == Solver::Hierarchical {
+        if rounds >= refine_rounds || s.solver == Solver::Hierarchical {
             break sol;
         }
         let v = sol.display_values(Part::Reflected);
@@ -397,6 +439,8 @@ pub fn solve_with(
         }
     };
     sol.stats.refinements = rounds;
+    sol.stats.discontinuities = discontinuities;
+    sol.stats.cut_vertices = cut_vertices;
     sol.stats.rays = stats_rays;
     sol.stats.seconds = start.elapsed().as_secs_f64();
     sol

@@ -6,6 +6,7 @@
 mod common;
 
 mod cli;
+mod cluster;
 mod environment;
 mod report;
 mod runs;

@@ -17,7 +17,9 @@ pub struct Plan {
     pub frames: config::Frames,
     /// The frame indices, in order.
     pub numbers: Vec<u32>,
-    pub gpu: Arc<Gpu>,
+    /// The device every run renders on (None: a plan that renders no run here: one written
+    /// for a cluster, a reference chunk, or the collection of a cluster's results).
+    pub gpu: Option<Arc<Gpu>>,
     /// Where the reference frames are cached.
     pub cache: PathBuf,
 }
@@ -44,6 +46,12 @@ pub struct RunSpec {
 
 impl Plan {
     pub fn new(cfg: &config::Compare) -> Result<Plan> {
+        Plan::open(cfg, true, true)
+    }
+
+    /// The plan of `cfg`: with the device (every run's settings checked against it) when
+    /// `gpu`, with the output and cache folders made (and checked writable) when `folders`.
+    pub fn open(cfg: &config::Compare, gpu: bool, folders: bool) -> Result<Plan> {
         cfg.validate()?;
         let spec = cfg.scene_name().to_string();
         let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
@@ -51,28 +59,36 @@ impl Plan {
         if let Some(note) = note {
             eprintln!("note: {note}");
         }
-        let gpu = Arc::new(Gpu::new(cfg.render.backend)?);
-        let triangles = scene.at(0.0).tris.len();
-        for &v in &cfg.vpls {
-            let r = cfg.run(cfg.samplers[0], v);
-            crate::gpu::renderer::check_config(
-                &crate::resolve::bounds(&r, triangles),
-                &gpu.limits,
-            )?;
-            for sw in &cfg.sweep {
-                for &x in &sw.values {
-                    let r = cfg.run_with(sw.sampler, v, Some((sw.knob, x)));
-                    crate::gpu::renderer::check_config(
-                        &crate::resolve::bounds(&r, triangles),
-                        &gpu.limits,
-                    )
-                    .map_err(|e| anyhow::anyhow!("`sweep` {sw}: {e}"))?;
+        let gpu = if gpu {
+            Some(Arc::new(Gpu::new(cfg.render.backend)?))
+        } else {
+            None
+        };
+        if let Some(gpu) = &gpu {
+            let triangles = scene.at(0.0).tris.len();
+            for &v in &cfg.vpls {
+                let r = cfg.run(cfg.samplers[0], v);
+                crate::gpu::renderer::check_config(
+                    &crate::resolve::bounds(&r, triangles),
+                    &gpu.limits,
+                )?;
+                for sw in &cfg.sweep {
+                    for &x in &sw.values {
+                        let r = cfg.run_with(sw.sampler, v, Some((sw.knob, x)));
+                        crate::gpu::renderer::check_config(
+                            &crate::resolve::bounds(&r, triangles),
+                            &gpu.limits,
+                        )
+                        .map_err(|e| anyhow::anyhow!("`sweep` {sw}: {e}"))?;
+                    }
                 }
             }
         }
-        crate::report::prepare_out_dir(&cfg.out)?;
         let cache = dir(cfg, &spec);
-        crate::report::prepare_out_dir(&cache)?;
+        if folders {
+            crate::report::prepare_out_dir(&cfg.out)?;
+            crate::report::prepare_out_dir(&cache)?;
+        }
         Ok(Plan {
             cfg: cfg.clone(),
             numbers: frames.iter().collect(),

@@ -90,11 +90,18 @@ fn half(plan: &Plan, h: usize, spp: u32, tick: &(dyn Fn() + Sync)) -> Result<Vec
         ..cfg.sequence.clone()
     };
     let mut traced = Vec::new();
-    crate::commands::reference::trace_frames(
+    // Walked from the first frame, so that the frames traced now are the ones a trace of the
+    // whole sequence gives (see `trace_walking`).
+    let last = todo.last().copied();
+    crate::commands::reference::trace_walking(
         &plan.scene,
         &seq,
         spp,
-        todo,
+        plan.numbers
+            .iter()
+            .copied()
+            .take_while(|&f| last.is_some_and(|l| f <= l)),
+        &|f| todo.binary_search(&f).is_ok(),
         tick,
         &mut |f, _, img| {
             crate::report::write_frame(&folder, f, &img, cfg.render.exposure)?;
@@ -121,16 +128,21 @@ pub fn load_or_render(plan: &Plan, tick: &(dyn Fn() + Sync)) -> Result<CachedRef
     let spp = halves(plan.cfg.spp);
     let a = half(plan, 0, spp[0], tick)?;
     let b = half(plan, 1, spp[1], tick)?;
+    Ok(from_halves(a, b, spp))
+}
+
+/// The reference of two halves of `spp` samples a pixel.
+pub fn from_halves(a: Vec<Hdr>, b: Vec<Hdr>, spp: [u32; 2]) -> CachedReference {
     let frames = a
         .iter()
         .zip(&b)
         .map(|(x, y)| mean_of_halves(x, y, spp))
         .collect();
-    Ok(CachedReference {
+    CachedReference {
         frames,
         halves: [a, b],
         spp,
-    })
+    }
 }
 
 #[cfg(test)]

@@ -64,19 +64,28 @@ fn mean(xs: impl Iterator<Item = f64>) -> Option<f64> {
     (n > 0).then(|| s / n as f64)
 }
 
-/// Renders one run's frames and measures them.
-fn run(
-    plan: &Plan,
-    reference: &[Hdr],
-    motion: &[Vec<Option<crate::metrics::warp::Warp>>],
-    spec: RunSpec,
-    progress: &crate::report::Progress,
-) -> Result<(RunRecord, Vec<Hdr>, FlickerMaps)> {
+/// What rendering one run gives, before it is measured: its frames and, per frame, the
+/// seconds, the share of VPL slots replaced and the acceptance rate.
+#[derive(Clone, Debug, Default, Serialize, serde::Deserialize)]
+pub struct Rendered {
+    #[serde(skip)]
+    pub images: Vec<Hdr>,
+    pub seconds: Vec<f64>,
+    pub replaced: Vec<f32>,
+    pub acceptance: Vec<Option<f32>>,
+}
+
+/// Renders one run's frames on the plan's device.
+pub fn render(plan: &Plan, spec: RunSpec, progress: &crate::report::Progress) -> Result<Rendered> {
     let cfg = config::Render {
         method: spec.method,
         ..plan.cfg.run_with(spec.sampler, spec.vpls, spec.knob)
     };
-    let mut p = Pipeline::new(plan.gpu.clone(), plan.scene.clone(), &cfg)?;
+    let gpu = plan
+        .gpu
+        .clone()
+        .ok_or_else(|| anyhow::anyhow!("a run renders on a device, and this plan has none"))?;
+    let mut p = Pipeline::new(gpu, plan.scene.clone(), &cfg)?;
     let label = match spec.method {
         Method::Instant => label(spec.sampler, spec.vpls, spec.knob),
         m => m.name().to_string(),
@@ -84,16 +93,32 @@ fn run(
     progress.set_detail(label.clone());
     let bar = progress.clone();
     p.on_solve_progress(move |s| bar.set_detail(format!("{label}: {s}")));
-    let (mut imgs, mut seconds, mut replaced, mut acceptance) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut out = Rendered::default();
     for &f in &plan.numbers {
         let fo = p.render_frame(f, false)?;
-        seconds.push(fo.seconds);
-        replaced.push(fo.selection.replaced);
-        acceptance.push(fo.selection.acceptance);
-        imgs.push(fo.image.hdr);
+        out.seconds.push(fo.seconds);
+        out.replaced.push(fo.selection.replaced);
+        out.acceptance.push(fo.selection.acceptance);
+        out.images.push(fo.image.hdr);
         progress.inc(1);
     }
+    Ok(out)
+}
+
+/// Measures one rendered run against the reference: its record and warped flicker maps.
+pub fn measure(
+    plan: &Plan,
+    reference: &[Hdr],
+    motion: &[Vec<Option<crate::metrics::warp::Warp>>],
+    spec: RunSpec,
+    rendered: Rendered,
+) -> Result<(RunRecord, Vec<Hdr>, FlickerMaps)> {
+    let Rendered {
+        images: imgs,
+        seconds,
+        replaced,
+        acceptance,
+    } = rendered;
     let metrics = metrics::sequence(&plan.numbers, &imgs, reference)?;
     let maps = flicker_maps(&imgs, reference, motion)?;
     let warped = summarize(&maps);
@@ -124,6 +149,31 @@ fn run(
     Ok((record, imgs, maps))
 }
 
+impl Results {
+    /// No runs yet, rendered on `adapter`.
+    pub fn new(adapter: String) -> Results {
+        Results {
+            records: Vec::new(),
+            shown: Vec::new(),
+            flicker: Vec::new(),
+            adapter,
+        }
+    }
+
+    /// Adds a measured run.
+    pub fn push(
+        &mut self,
+        spec: RunSpec,
+        (record, imgs, maps): (RunRecord, Vec<Hdr>, FlickerMaps),
+    ) {
+        if spec.shown {
+            self.shown.push((record.label(), imgs));
+            self.flicker.push((record.label(), maps));
+        }
+        self.records.push(record);
+    }
+}
+
 /// Every run of the plan, in order.
 pub fn run_all(
     plan: &Plan,
@@ -131,19 +181,15 @@ pub fn run_all(
     motion: &[Vec<Option<crate::metrics::warp::Warp>>],
     progress: &crate::report::Progress,
 ) -> Result<Results> {
-    let mut results = Results {
-        records: Vec::new(),
-        shown: Vec::new(),
-        flicker: Vec::new(),
-        adapter: plan.gpu.adapter.to_string(),
-    };
+    let adapter = plan
+        .gpu
+        .as_ref()
+        .map(|g| g.adapter.to_string())
+        .unwrap_or_default();
+    let mut results = Results::new(adapter);
     for spec in plan.runs() {
-        let (record, imgs, maps) = run(plan, reference, motion, spec, progress)?;
-        if spec.shown {
-            results.shown.push((record.label(), imgs));
-            results.flicker.push((record.label(), maps));
-        }
-        results.records.push(record);
+        let rendered = render(plan, spec, progress)?;
+        results.push(spec, measure(plan, reference, motion, spec, rendered)?);
     }
     Ok(results)
 }
