@@ -151,12 +151,9 @@ pub fn render(cfg: &config::Render) -> Result<RenderSummary> {
 
 /// `irad render` on a device the caller opened.
 pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
-    cfg.validate()?;
     let spec = cfg.scene_name();
-    let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
     // Sizes are checked against the adapter, and the folder for writing, before any frame.
-    let mut pipeline = Pipeline::new(gpu, scene, cfg)?;
-    let (frames, note) = cfg.sequence.frames_or_all(pipeline.scene.duration());
+    let (mut pipeline, frames, note) = start(gpu, cfg, None)?;
     let out = &cfg.out;
     let dir = report::prepare_run_dir(
         out,
@@ -252,6 +249,25 @@ pub fn render_on(gpu: Arc<Gpu>, cfg: &config::Render) -> Result<RenderSummary> {
         frames,
         mean_seconds: means.means().0,
     })
+}
+
+/// A render without its files: `cfg` checked, the scene loaded (or `scene`, given `cfg`'s
+/// camera and environment), the pipeline built on `gpu` and the frames to render (with the
+/// note when a long animation is capped). [`render_on`] writes each
+/// [`Pipeline::render_frame`]'s output; a library caller (the Python package) keeps it.
+pub fn start(
+    gpu: Arc<Gpu>,
+    cfg: &config::Render,
+    scene: Option<crate::scene::Scene>,
+) -> Result<(Pipeline, config::Frames, Option<String>)> {
+    cfg.validate()?;
+    let scene = match scene {
+        Some(s) => cfg.sequence.prepare_scene(s)?,
+        None => cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?,
+    };
+    let pipeline = Pipeline::new(gpu, scene, cfg)?;
+    let (frames, note) = cfg.sequence.frames_or_all(pipeline.scene.duration());
+    Ok((pipeline, frames, note))
 }
 
 /// Writes a frame's EXR and PNG (and its components'); returns the PNG's image.

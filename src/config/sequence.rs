@@ -355,7 +355,14 @@ impl Sequence {
     }
     /// Loads the scene named (or `default`), prints its warnings, and puts `--camera` in it.
     pub fn load_scene(&self, default: &str) -> Result<Scene> {
-        let mut scene = load_scene_with(self.scene_or(default), &self.load_options())?;
+        self.prepare_scene(load_scene_with(
+            self.scene_or(default),
+            &self.load_options(),
+        )?)
+    }
+    /// Puts `--camera` and `--environment` in a loaded scene (what [`Sequence::load_scene`]
+    /// does after loading; a library caller holding a scene calls it directly).
+    pub fn prepare_scene(&self, mut scene: Scene) -> Result<Scene> {
         if let Some(c) = &self.camera {
             c.apply(&mut scene)?;
         }
