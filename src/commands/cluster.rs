@@ -768,13 +768,7 @@ pub fn collect_compare(cfg: &config::Compare, dir: &Path, plan_file: &PlanFile) 
     let [a, b] = halves;
     let reference = reference_cache::from_halves(a, b, spp);
     let motion = plan.motion();
-    let floor = crate::metrics::floor::floor(
-        &plan.numbers,
-        &reference.frames,
-        [&reference.halves[0], &reference.halves[1]],
-        reference.spp,
-        Some(&motion),
-    )?;
+    let floor = reference.floor(&plan, &motion)?;
     let mut adapters: Vec<String> = Vec::new();
     // Each run measured as it is read: one run's frames in memory at a time (besides the
     // shown runs', which the page needs).

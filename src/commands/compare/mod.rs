@@ -22,13 +22,7 @@ pub fn compare(cfg: &config::Compare) -> Result<()> {
     pb.set_detail("reference");
     let reference = reference_cache::load_or_render(&plan, &|| pb.inc(1))?;
     let motion = plan.motion();
-    let floor = crate::metrics::floor::floor(
-        &plan.numbers,
-        &reference.frames,
-        [&reference.halves[0], &reference.halves[1]],
-        reference.spp,
-        Some(&motion),
-    )?;
+    let floor = reference.floor(&plan, &motion)?;
     let results = runs::run_all(&plan, &reference.frames, &motion, &pb)?;
     pb.finish_and_clear();
     outputs::write(&plan, &reference.frames, &floor, &results)

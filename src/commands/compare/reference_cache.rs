@@ -29,6 +29,24 @@ pub struct CachedReference {
     pub spp: [u32; 2],
 }
 
+impl CachedReference {
+    /// The reference's own noise for the plan's frames: what a perfect renderer would
+    /// measure (its warped flicker along `motion`).
+    pub fn floor(
+        &self,
+        plan: &Plan,
+        motion: &[Vec<Option<crate::metrics::warp::Warp>>],
+    ) -> Result<crate::metrics::floor::Floor> {
+        crate::metrics::floor::floor(
+            &plan.numbers,
+            &self.frames,
+            [&self.halves[0], &self.halves[1]],
+            self.spp,
+            Some(motion),
+        )
+    }
+}
+
 const HALF: [&str; 2] = ["a", "b"];
 
 fn cached(plan: &Plan, h: usize, f: u32) -> PathBuf {
