@@ -677,8 +677,8 @@ fn compare(py: Python<'_>, args: Vec<String>) -> PyResult<PathBuf> {
         unreachable!("parsed as compare")
     };
     guard(py, || {
-        irad::gpu::quiet_mesa_runtime_dir();
-        irad::commands::compare::compare(&cfg).context("irad compare")?;
+        let gpu = device(cfg.render.backend)?;
+        irad::commands::compare::compare_on(gpu, &cfg).context("irad compare")?;
         Ok(cfg.out.clone())
     })
 }

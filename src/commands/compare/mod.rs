@@ -17,7 +17,16 @@ use anyhow::Result;
 
 /// `irad compare`, on one GPU device for all its runs.
 pub fn compare(cfg: &config::Compare) -> Result<()> {
-    let plan = plan::Plan::new(cfg)?;
+    compare_with(plan::Plan::new(cfg)?)
+}
+
+/// [`compare`] on a device the caller holds (the Python package's one per process).
+pub fn compare_on(gpu: std::sync::Arc<crate::gpu::Gpu>, cfg: &config::Compare) -> Result<()> {
+    let plan = plan::Plan::open_with(cfg, Some(&|| Ok(gpu.clone())), true)?;
+    compare_with(plan)
+}
+
+fn compare_with(plan: plan::Plan) -> Result<()> {
     let pb = crate::report::progress(work_units(&plan), "compare");
     pb.set_detail("reference");
     let reference = reference_cache::load_or_render(&plan, &|| pb.inc(1))?;

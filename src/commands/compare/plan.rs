@@ -52,6 +52,16 @@ impl Plan {
     /// The plan of `cfg`: with the device (every run's settings checked against it) when
     /// `gpu`, with the output and cache folders made (and checked writable) when `folders`.
     pub fn open(cfg: &config::Compare, gpu: bool, folders: bool) -> Result<Plan> {
+        let device = || -> Result<Arc<Gpu>> { Ok(Arc::new(Gpu::new(cfg.render.backend)?)) };
+        Plan::open_with(cfg, if gpu { Some(&device) } else { None }, folders)
+    }
+
+    /// [`Plan::open`] on the device `gpu` gives (a caller's shared device), or none.
+    pub fn open_with(
+        cfg: &config::Compare,
+        gpu: Option<&dyn Fn() -> Result<Arc<Gpu>>>,
+        folders: bool,
+    ) -> Result<Plan> {
         cfg.validate()?;
         let spec = cfg.scene_name().to_string();
         let scene = cfg.sequence.load_scene(config::DEFAULT_ANIMATED_SCENE)?;
@@ -59,11 +69,7 @@ impl Plan {
         if let Some(note) = note {
             eprintln!("note: {note}");
         }
-        let gpu = if gpu {
-            Some(Arc::new(Gpu::new(cfg.render.backend)?))
-        } else {
-            None
-        };
+        let gpu = gpu.map(|open| open()).transpose()?;
         if let Some(gpu) = &gpu {
             let triangles = scene.at(0.0).tris.len();
             for &v in &cfg.vpls {
