@@ -664,11 +664,14 @@ fn remove_temporaries(folder: &Path, frames: std::ops::Range<u32>) {
         return;
     };
     let stems: Vec<String> = frames
-        .map(|f| format!(".{}.", crate::report::frame_stem(f)))
+        .map(|f| format!("{}.", crate::report::frame_stem(f)))
         .collect();
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().into_owned();
-        if name.contains(".tmp-") && stems.iter().any(|s| name.starts_with(s.as_str())) {
+        let Some((file, _)) = crate::report::parse_temporary(&name) else {
+            continue;
+        };
+        if stems.iter().any(|s| file.starts_with(s.as_str())) {
             let _ = std::fs::remove_file(e.path());
         }
     }

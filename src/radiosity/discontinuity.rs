@@ -74,6 +74,11 @@ fn weld(frame: &Frame, keep: impl Fn(usize) -> bool) -> Vec<Edge> {
     edges
 }
 
+/// Whether triangle `i` is an area emitter's.
+fn emits(frame: &Frame, i: usize) -> bool {
+    frame.emission(i).max_element() > 0.0
+}
+
 /// Whether an edge is a real edge of its surface: not the diagonal between two coplanar
 /// triangles (a quad's), where nothing starts or stops.
 fn is_crease(frame: &Frame, e: &Edge) -> bool {
@@ -89,10 +94,9 @@ fn is_crease(frame: &Frame, e: &Edge) -> bool {
 type Outline = (Vec<(Vec3, Vec3, Vec3)>, Vec<(Vec3, Vec3)>);
 
 fn emitter_outline(frame: &Frame) -> Outline {
-    let emits = |i: usize| frame.emission(i).max_element() > 0.0;
     let mut outline = Vec::new();
     let mut corners: Vec<(Vec3, Vec3)> = Vec::new();
-    for e in weld(frame, emits) {
+    for e in weld(frame, |i| emits(frame, i)) {
         if !is_crease(frame, &e) {
             continue;
         }
@@ -267,7 +271,7 @@ pub fn lines(frame: &Frame, tracer: &Tracer, spacing: f32) -> Vec<Line> {
     if outline.is_empty() {
         return Vec::new();
     }
-    let emits = |i: usize| frame.emission(i).max_element() > 0.0;
+    let emits = |i: usize| emits(frame, i);
     let occluders: Vec<Edge> = weld(frame, |i| !emits(i))
         .into_iter()
         .filter(|e| is_crease(frame, e))

@@ -7,6 +7,7 @@ mod progress;
 mod run_dir;
 
 pub use progress::Progress;
+pub(crate) use run_dir::parse_temporary;
 pub use run_dir::{prepare_run_dir, run_files, RunDir, MANIFEST};
 
 use anyhow::{Context, Result};

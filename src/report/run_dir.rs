@@ -139,11 +139,18 @@ pub fn prepare_run_dir(dir: &Path, planned: BTreeSet<String>, overwrite: bool) -
     })
 }
 
-/// Whether `name` is one of irad's own temporaries of an output file (`.NAME.tmp-PID.EXT`,
-/// see `image::atomic_write` and `GifStream`), and of which process.
-fn temporary_of(name: &str) -> Option<u32> {
+/// The file a temporary of irad's is for and the process writing it, when `name` is one
+/// (`.NAME.tmp-PID.EXT`, see `image::atomic_write` and `GifStream`).
+pub(crate) fn parse_temporary(name: &str) -> Option<(&str, u32)> {
     let (inner, rest) = name.strip_prefix('.')?.split_once(".tmp-")?;
     let pid = rest.split('.').next()?.parse().ok()?;
+    Some((inner, pid))
+}
+
+/// Whether `name` is one of irad's own temporaries of a run's output file, and of which
+/// process.
+fn temporary_of(name: &str) -> Option<u32> {
+    let (inner, pid) = parse_temporary(name)?;
     (is_run_output(inner) || inner == MANIFEST).then_some(pid)
 }
 
