@@ -79,6 +79,7 @@ impl Pipeline {
                 cfg.sequence.size.height,
                 renderer.config.aa,
             ),
+            edges: None,
         });
         Ok(Pipeline {
             classical,
@@ -160,7 +161,10 @@ impl Pipeline {
             };
         self.last_lights.clone_from(&lights);
         lap(&mut stages, "gradient", &mut t);
-        // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back.
+        // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back (with the
+        // direct and indirect parts too where emitter edges need the emission they leave).
+        let parts =
+            components || (self.renderer.config.edge_rays > 0 && !frame.emitters.tris.is_empty());
         let image = self.renderer.render(
             &GpuFrame {
                 frame: &frame,
@@ -170,7 +174,7 @@ impl Pipeline {
                 near: &near,
                 gradient: gradient.as_ref(),
             },
-            components,
+            parts,
         )?;
         stages.extend(image.timings.iter().map(|&(n, t)| (n, t)));
         let (image, solved, radiosity) = match &mut self.classical {
@@ -180,14 +184,16 @@ impl Pipeline {
                     &frame,
                     &self.tracer,
                     &self.renderer,
-                    components,
+                    parts,
                     &mut stages,
                 )?;
                 (image, Some(stats.is_some()), stats)
             }
             None => (image, None, None),
         };
-        // Emitter edges box-filtered by camera rays (CPU), in place of the sub-samples' steps.
+        // Emitter edges box-filtered by camera rays (CPU), in place of the sub-samples' steps:
+        // each edge pixel's emission (the frame less its direct and indirect parts, as the
+        // GPU's sub-samples saw it) is replaced by its box filter.
         let mut image = image;
         t = Instant::now();
         let c = &self.renderer.config;
@@ -199,13 +205,63 @@ impl Pipeline {
             c.aa,
             c.edge_rays,
         );
-        if !edges.is_empty() {
-            for &(i, d) in &edges {
-                image.hdr.data[i] = (image.hdr.data[i] + d).max(glam::Vec3::ZERO);
+        if let (false, Some(d), Some(ind)) = (edges.is_empty(), &image.direct, &image.indirect) {
+            for &(i, e) in &edges {
+                let o = &mut image.hdr.data[i];
+                let seen = *o - d.data[i] - ind.data[i];
+                *o = (*o - seen + e).max(glam::Vec3::ZERO);
             }
             image.ldr = image.hdr.to_srgb8(c.exposure);
         }
         lap(&mut stages, "emitter_edges", &mut t);
+        // A classical method's silhouettes and creases, box-filtered by camera rays through
+        // its solution (CPU), in place of the sub-samples' steps.
+        if let Some(edge) = self.classical.as_ref().and_then(|c| c.edges.as_ref()) {
+            let cam = frame.camera;
+            let edges = crate::trace::edges::surface_edges(
+                (c.width, c.height),
+                c.aa,
+                c.edge_rays,
+                frame.camera.position.length().max(1.0),
+                |p| {
+                    let d = cam.ray_dir(p, c.width, c.height);
+                    let hit = edge
+                        .reflected
+                        .tracer
+                        .intersect(cam.position, d, f32::INFINITY);
+                    match hit {
+                        Some(hit) => {
+                            let (e, b1, b2) = (hit.tri as usize, hit.b1, hit.b2);
+                            let els = &edge.reflected.elements;
+                            let n = els.normals[e];
+                            let i = &edge.indirect[e];
+                            let indirect = i[0] * (1.0 - b1 - b2) + i[1] * b1 + i[2] * b2;
+                            crate::trace::edges::Seen {
+                                radiance: [edge.reflected.at(e, b1, b2), indirect],
+                                plane: Some((n, n.dot(els.tris[e][0]))),
+                            }
+                        }
+                        None => crate::trace::edges::Seen {
+                            radiance: [glam::Vec3::ZERO; 2],
+                            plane: None,
+                        },
+                    }
+                },
+            );
+            for &(i, [d, di]) in &edges {
+                image.hdr.data[i] = (image.hdr.data[i] + d).max(glam::Vec3::ZERO);
+                if let Some(ind) = &mut image.indirect {
+                    ind.data[i] = (ind.data[i] + di).max(glam::Vec3::ZERO);
+                }
+                if let Some(dir) = &mut image.direct {
+                    dir.data[i] = (dir.data[i] + d - di).max(glam::Vec3::ZERO);
+                }
+            }
+            if !edges.is_empty() {
+                image.ldr = image.hdr.to_srgb8(c.exposure);
+            }
+            lap(&mut stages, "surface_edges", &mut t);
+        }
         // Clamping-bias compensation (CPU): pixel surfaces, emitter samples, VPLs, clamp ->
         // the light the clamp left out near creases, added to the pixels (and the indirect).
         if c.compensate > 0 && self.classical.is_none() {
@@ -233,6 +289,9 @@ impl Pipeline {
             image.ldr = image.hdr.to_srgb8(c.exposure);
             lap(&mut stages, "compensation", &mut t);
         }
+        if !components {
+            (image.direct, image.indirect) = (None, None);
+        }
         Ok(FrameOutput {
             index: f,
             time: frame.time,
@@ -254,6 +313,15 @@ struct Classical {
     cache: radiosity::Cache,
     progress: Box<dyn Fn(&radiosity::SolveProgress) + Send + Sync>,
     pass: RadiosityPass,
+    /// The solution as the CPU shows it, for the edges' camera rays (with `edge_rays`).
+    edges: Option<EdgeShading>,
+}
+
+/// A solution's reflected light on its elements (with their BVH) and, per element corner, the
+/// indirect part of it.
+struct EdgeShading {
+    reflected: radiosity::display::Shaded,
+    indirect: Vec<[glam::Vec3; 3]>,
 }
 
 impl Classical {
@@ -277,6 +345,14 @@ impl Classical {
                 radiosity::display::Shaded::new(frame, solution, radiosity::Part::Indirect);
             // Emission comes from the compose pass, as for instant radiosity.
             self.pass.upload_with(&renderer.gpu, &shaded, false);
+            self.edges = (renderer.config.edge_rays > 0).then(|| EdgeShading {
+                reflected: radiosity::display::Shaded::new(
+                    frame,
+                    solution,
+                    radiosity::Part::Reflected,
+                ),
+                indirect: shaded.corners,
+            });
         }
         lap(stages, "radiosity_solve", &mut t);
         let indirect = self.pass.render(&renderer.gpu, frame)?;

@@ -147,7 +147,7 @@ fn emitter_edges_are_the_covered_fraction_of_its_radiance() {
     assert!(partial >= 18, "{partial} partly covered pixels");
     for backend in backends() {
         // The sub-samples alone (`--edge-rays 0`), then with the edges box-filtered by rays.
-        for (aa, rays) in [(1, 0), (2, 0), (4, 0), (1, 16), (2, 16)] {
+        for (aa, rays) in [(1, 0), (2, 0), (4, 0), (1, 16), (2, 16), (2, 1)] {
             let mut cfg = config(w, 16, aa, backend);
             cfg.quality.edge_rays = rays;
             let mut p = pipeline(&cfg);
@@ -175,9 +175,11 @@ fn emitter_edges_are_the_covered_fraction_of_its_radiance() {
             // resolved to 1/S^2 of a pixel with an error of the same sign all along it (at most
             // 1/(2 S^2) a pixel; more where two edges meet): the total's error depends on where
             // the edges fall, which is why 4x4 happens to be further off here than 2x2. With
-            // 16 x 16 rays at the edges: aa 1 worst 0.0150, total -0.114%; aa 2 alike.
+            // each emitter triangle's exact area in the edge pixels (the rays only find what
+            // hides it), worst 0.0000 and total +0.000% at aa 1 and 2, with 16 x 16 rays or
+            // with one (rays counting the coverage instead gave 0.0150 and -0.114% at 16).
             let (worst_max, sum_max) = match (aa, rays) {
-                (_, 16) => (0.025, 0.002),
+                (_, 1 | 16) => (1e-4, 1e-5),
                 (2, _) => (0.29, 0.0023),
                 _ => (0.083, 0.022),
             };
@@ -238,12 +240,19 @@ fn cornell_mean_luminance_matches_the_path_tracer_with_the_light_in_view() {
                 rel * 100.0
             );
             // Measured on lavapipe (against this 64-spp reference; one at 64 spp and seed 1 has
-            // its mean within 0.04% of a 4096-spp one's): instant +6.83% with aa 1, +0.66% with aa 2;
-            // progressive +7.14% and +0.96%.
+            // its mean within 0.04% of a 4096-spp one's): instant +5.37% with aa 1, -1.25% with
+            // aa 2 and the light's edges box-filtered (its emission exact: the tests of
+            // `trace::edges` and the test above; the 2x2 sub-samples alone made the light 0.5%
+            // of the frame brighter, which hid as much of instant radiosity's own darkening,
+            // the clamp's and the VPLs'); progressive +6.35% and -0.21%.
+            let bound = match method {
+                Method::Instant => 0.015,
+                _ => 0.01,
+            };
             if aa == 1 {
                 assert!(rel > 0.045, "{method:?} aa 1: {rel}");
             } else {
-                assert!(rel.abs() < 0.01, "{method:?} aa {aa}: {rel}");
+                assert!(rel.abs() < bound, "{method:?} aa {aa}: {rel}");
             }
         }
     }
