@@ -120,9 +120,10 @@ fn triangle(&[a, b, c]: &[Vec3; 3], k: f32) -> Triangle {
 /// (`search_depth_threshold` 0; medium merges only Morton-order neighbours in its first 3
 /// passes). On a regularly tessellated mesh, where neighbouring merges cost the same, those
 /// passes made a tree whose shadow rays cost 10-30 times as much: the importance of 1024 VPLs
-/// over 256 camera points on `benches/big_mesh.py`'s 187k-triangle court took 0.32 s instead of
-/// 0.036 s (4.5 s instead of 0.16 s at 1.04M triangles, 2.7 times as long on the atrium), for a
-/// build 15-30% longer. The same triangles are hit; only the tree differs.
+/// over 256 camera points on `benches/big_mesh.py`'s 187k-triangle court took 1.40 s instead of
+/// 0.08 s (4.5 s instead of 0.16 s at 1.04M triangles, 0.06 s instead of 0.022 s on the
+/// atrium; one session at load average 9), for a build 15-30% longer. The same triangles are
+/// hit; only the tree differs (docs/design.md, "Big meshes").
 const BVH_PARAMS: BvhBuildParams = BvhBuildParams {
     search_depth_threshold: 0,
     ..BvhBuildParams::medium_build()
