@@ -116,12 +116,21 @@ fn triangle(&[a, b, c]: &[Vec3; 3], k: f32) -> Triangle {
     }
 }
 
+/// obvhs's medium build, but with PLOC's full search distance from the first merges up
+/// (`search_depth_threshold` 0; medium merges only Morton-order neighbours in its first 3
+/// passes). On a regularly tessellated mesh, where neighbouring merges cost the same, those
+/// passes made a tree whose shadow rays cost 10-30 times as much: the importance of 1024 VPLs
+/// over 256 camera points on `benches/big_mesh.py`'s 187k-triangle court took 1.40 s instead of
+/// 0.08 s (4.5 s instead of 0.16 s at 1.04M triangles, 0.06 s instead of 0.022 s on the
+/// atrium; one session at load average 9), for a build 15-30% longer. The same triangles are
+/// hit; only the tree differs (docs/design.md, "Big meshes").
+const BVH_PARAMS: BvhBuildParams = BvhBuildParams {
+    search_depth_threshold: 0,
+    ..BvhBuildParams::medium_build()
+};
+
 fn build(tris: &[Triangle]) -> CwBvh {
-    obvhs::cwbvh::builder::build_cwbvh_from_tris(
-        tris,
-        BvhBuildParams::medium_build(),
-        &mut Duration::default(),
-    )
+    obvhs::cwbvh::builder::build_cwbvh_from_tris(tris, BVH_PARAMS, &mut Duration::default())
 }
 
 impl Tracer {
@@ -440,6 +449,68 @@ mod tests {
             hits > 15_000 && light_hits > 20 && blocked > 1000,
             "{hits} {light_hits} {blocked}"
         );
+    }
+
+    /// Triangle tests per shadow ray in a box of regularly tessellated walls (a grid of `n` x
+    /// `n` cells a face), between random points on its floor and its other faces, with a BVH
+    /// built with `params`.
+    fn tests_per_shadow_ray(n: usize, params: BvhBuildParams) -> f64 {
+        use crate::math::rng;
+        use rand::Rng;
+        let mut tris = Vec::new();
+        let corner = |f: usize, u: f32, v: f32| -> Vec3 {
+            let (a, b) = (u * 2.0 - 1.0, v * 2.0 - 1.0);
+            [
+                Vec3::new(a, -1.0, b),
+                Vec3::new(a, 1.0, b),
+                Vec3::new(a, b, -1.0),
+                Vec3::new(-1.0, a, b),
+                Vec3::new(1.0, a, b),
+            ][f]
+        };
+        for f in 0..5 {
+            for i in 0..n {
+                for j in 0..n {
+                    let (u0, v0) = (i as f32 / n as f32, j as f32 / n as f32);
+                    let (u1, v1) = (u0 + 1.0 / n as f32, v0 + 1.0 / n as f32);
+                    let q = [
+                        corner(f, u0, v0),
+                        corner(f, u1, v0),
+                        corner(f, u1, v1),
+                        corner(f, u0, v1),
+                    ];
+                    tris.push(triangle(&[q[0], q[1], q[2]], 1.0));
+                    tris.push(triangle(&[q[0], q[2], q[3]], 1.0));
+                }
+            }
+        }
+        let bvh =
+            obvhs::cwbvh::builder::build_cwbvh_from_tris(&tris, params, &mut Duration::default());
+        let mut r = rng(&[23, 5]);
+        let (rays, mut tests) = (2000, 0u64);
+        for _ in 0..rays {
+            let a = corner(0, r.random(), r.random()) + Vec3::Y * 1e-3;
+            let b = corner(r.random_range(1..5), r.random(), r.random()) * 0.999;
+            let d = b - a;
+            let ray = Ray::new(a.into(), d.normalize().into(), 0.0, d.length());
+            bvh.ray_traverse_miss(ray, |r, id| {
+                tests += 1;
+                tris[bvh.primitive_indices[id] as usize].intersect(r)
+            });
+        }
+        tests as f64 / rays as f64
+    }
+
+    /// obvhs's medium build made a poor tree of a regular tessellation (its first merges,
+    /// by Morton-order neighbour only, tie everywhere): shadow rays in the big-mesh bench
+    /// cost 10-30 times as much. [`BVH_PARAMS`] searches from the first merge.
+    #[test]
+    fn a_regular_tessellation_gets_a_tree_shadow_rays_cross_cheaply() {
+        let ours = tests_per_shadow_ray(100, BVH_PARAMS);
+        let medium = tests_per_shadow_ray(100, BvhBuildParams::medium_build());
+        eprintln!("triangle tests per shadow ray: {ours:.1}, medium build {medium:.1}");
+        // Measured: 0.0 (no ray meets a leaf box it does not cross), medium build 14.5.
+        assert!(ours < 1.0, "{ours} (medium build: {medium})");
     }
 
     #[test]
