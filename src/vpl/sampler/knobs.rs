@@ -192,7 +192,7 @@ knobs! {
     /// RMSMC: how fast the move rate follows the scene: rate = min(1, rmsmc-rate +
     /// rmsmc-follow * d), d the total-variation distance between the last frame's and this
     /// frame's importance over a fixed probe of paths (0: a fixed rate)
-    rmsmc_follow: f32 = 10.0, "rmsmc-follow", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Rmsmc];
+    rmsmc_follow: f32 = 2.0, "rmsmc-follow", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Rmsmc];
     /// Defensive floor of the importance, as a fraction of its mean [default: 0.5 for mh,
     /// 0.05 for the others]
     eps: Option<f32> = None, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc, Rmsmc];
