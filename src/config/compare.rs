@@ -35,7 +35,8 @@ pub struct Compare {
     #[cfg_attr(feature = "cli", arg(long, allow_hyphen_values = true))]
     pub show_vpls: Option<u32>,
     /// Sweep one sampler's knob: SAMPLER:KNOB=V1,V2,... (knobs: mh-rate, mh-follow, mh-escape,
-    /// smc-rate, smc-follow, eps, candidates, camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
+    /// smc-rate, smc-follow, rmsmc-ess, rmsmc-rate, rmsmc-follow, eps, candidates,
+    /// camera-points), e.g. `--sweep mh:mh-rate=0.01,0.1,1`; repeat the flag for
     /// more. The swept sampler runs once per value and VPL count, drawn as one curve on the
     /// flicker-against-error charts; other samplers draw a curve over --vpls
     #[cfg_attr(feature = "cli", arg(long, value_name = "SAMPLER:KNOB=V1,V2,.."))]

@@ -28,6 +28,11 @@
 //!   its own path in the new scene (through its Russian-roulette coins, weighted by their
 //!   probabilities now over then), and a fraction `smc_rate` of the slots, chosen at random,
 //!   take newborn particles. Lagging behind a moving target costs it variance, not bias.
+//! - `rmsmc`: resample-move SMC (Gilks and Berzuini 2001) on smc's particles: each particle's
+//!   SMC weight follows the ratio of the new target to the old at its re-traced path, the
+//!   particles are resampled when their effective sample size falls below `rmsmc_ess` N, and
+//!   Metropolis-Hastings moves (independence proposals from p) rejuvenate them at a rate that
+//!   follows how far a fixed probe's importance moved (0 where nothing moved: frozen's VPLs).
 //!
 //! For cdf, mh and smc, I includes the defensive floor `eps * mean(I over the candidates)`.
 
@@ -36,11 +41,13 @@ mod common;
 pub mod knobs;
 mod mh;
 mod rejection;
+mod rmsmc;
 mod settings;
 mod smc;
 mod uniform;
 
 pub use common::{cdf_draw, mh_accept, PATHS_PER_FRAME};
+pub use rmsmc::{assign as rmsmc_assign, ess as rmsmc_ess};
 pub use settings::SamplerConfig;
 pub use smc::spread as smc_spread;
 
@@ -69,17 +76,21 @@ pub enum SamplerKind {
     /// Sequential Monte Carlo: particles drawn as cdf draws them keep their paths (re-traced
     /// in each frame's scene) and their weights; --smc-rate of the slots renew a frame
     Smc,
+    /// Resample-move SMC: smc's particles with weights updated by the target's ratio, resampled
+    /// when their effective sample size falls, rejuvenated by Metropolis-Hastings moves
+    Rmsmc,
 }
 
 impl SamplerKind {
     /// Every sampler, in the order the help lists them.
-    pub const ALL: [SamplerKind; 6] = [
+    pub const ALL: [SamplerKind; 7] = [
         SamplerKind::Uniform,
         SamplerKind::Cdf,
         SamplerKind::Mh,
         SamplerKind::Frozen,
         SamplerKind::Rejection,
         SamplerKind::Smc,
+        SamplerKind::Rmsmc,
     ];
 
     /// The name the settings and the CLI spell (`uniform`, `cdf`, `mh`, ...).
@@ -91,6 +102,7 @@ impl SamplerKind {
             SamplerKind::Frozen => "frozen",
             SamplerKind::Rejection => "rejection",
             SamplerKind::Smc => "smc",
+            SamplerKind::Rmsmc => "rmsmc",
         }
     }
 
@@ -187,6 +199,7 @@ impl Sampler {
             SamplerKind::Frozen => Box::new(uniform::Uniform::new(&params, true)),
             SamplerKind::Rejection => Box::new(rejection::Rejection::new(&params)),
             SamplerKind::Smc => Box::new(smc::Smc::new(&params)),
+            SamplerKind::Rmsmc => Box::new(rmsmc::Rmsmc::new(&params)),
         };
         Sampler {
             params,

@@ -7,6 +7,7 @@ use crate::trace::Tracer;
 use crate::vpl::importance::{importance_all, CameraPoint};
 use crate::vpl::{trace_path, ShadedVpl, Vpl};
 use rand::Rng;
+use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 
 /// Path ids of frame f start at f * PATHS_PER_FRAME, so frames draw independent paths.
@@ -198,6 +199,46 @@ pub fn weighted(
         b: Some(b),
         ..Default::default()
     }
+}
+
+/// Total-variation distance between a set of paths' normalized importance last frame (`last`,
+/// by key) and now (`vpls` with importance `raw`), over the paths present both frames; VPLs of
+/// last frame that are gone (their paths got shorter) count with their whole mass. 0 when
+/// `last` is empty (the first frame), exactly 0 when nothing changed.
+pub fn tv_change(last: &HashMap<Key, f32>, vpls: &[Vpl], raw: &[f32]) -> f32 {
+    if last.is_empty() {
+        return 0.0;
+    }
+    let now_paths: HashSet<u64> = vpls.iter().map(|v| v.path).collect();
+    let before_paths: HashSet<u64> = last.keys().map(|k| k.0).collect();
+    let now: Vec<(Key, f64)> = vpls
+        .iter()
+        .zip(raw)
+        .filter(|(v, _)| before_paths.contains(&v.path))
+        .map(|(v, &i)| (key(v), i as f64))
+        .collect();
+    let before: HashMap<Key, f64> = last
+        .iter()
+        .filter(|(k, _)| now_paths.contains(&k.0))
+        .map(|(&k, &i)| (k, i as f64))
+        .collect();
+    let (sn, sb) = (
+        now.iter().map(|x| x.1).sum::<f64>(),
+        before.values().sum::<f64>(),
+    );
+    if sn <= 0.0 || sb <= 0.0 {
+        return if sn == sb { 0.0 } else { 1.0 };
+    }
+    let mut matched = 0.0f64;
+    let mut d = 0.0f64;
+    for (k, i) in &now {
+        let b = before.get(k).copied().unwrap_or(0.0);
+        matched += b;
+        d += (i / sn - b / sb).abs();
+    }
+    // VPLs of last frame that are gone (their paths got shorter).
+    d += (sb - matched).max(0.0) / sb;
+    (0.5 * d).min(1.0) as f32
 }
 
 /// Fraction of slots whose key differs between two frames (1 when the counts differ).

@@ -182,13 +182,24 @@ knobs! {
     /// smc-follow * D), D the spread of the kept particles' importance now over at birth (0:
     /// a fixed rate)
     smc_follow: f32 = 0.0, "smc-follow", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Smc];
+    /// RMSMC: resample the particles when their effective sample size falls below this
+    /// fraction of the slots (0: never; 1: whenever their weights differ)
+    rmsmc_ess: f32 = 0.5, "rmsmc-ess", Float { lo: 0.0, lo_open: false, hi: 1.0 }, [Rmsmc];
+    /// RMSMC: probability that a slot makes a Metropolis-Hastings move in a frame where nothing
+    /// moves (0: a still scene keeps every VPL, as frozen). The rate rises with how far the
+    /// target moved, see --rmsmc-follow
+    rmsmc_rate: f32 = 0.0, "rmsmc-rate", Float { lo: 0.0, lo_open: false, hi: 1.0 }, [Rmsmc];
+    /// RMSMC: how fast the move rate follows the scene: rate = min(1, rmsmc-rate +
+    /// rmsmc-follow * d), d the total-variation distance between the last frame's and this
+    /// frame's importance over a fixed probe of paths (0: a fixed rate)
+    rmsmc_follow: f32 = 2.0, "rmsmc-follow", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Rmsmc];
     /// Defensive floor of the importance, as a fraction of its mean [default: 0.5 for mh,
     /// 0.05 for the others]
-    eps: Option<f32> = None, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc];
+    eps: Option<f32> = None, "eps", Float { lo: 0.0, lo_open: false, hi: 1000.0 }, [Cdf, Mh, Rejection, Smc, Rmsmc];
     /// M: candidate VPLs a frame for cdf, mh and smc [default: 4 x --vpls]
-    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: MAX_CANDIDATES }, [Cdf, Mh, Smc];
+    candidates: Option<u32> = None, "candidates", Int { lo: 1, hi: MAX_CANDIDATES }, [Cdf, Mh, Smc, Rmsmc];
     /// K: camera points for importance
-    camera_points: u32 = 256, "camera-points", Int { lo: 1, hi: 1 << 20 }, [Cdf, Mh, Rejection, Smc];
+    camera_points: u32 = 256, "camera-points", Int { lo: 1, hi: 1 << 20 }, [Cdf, Mh, Rejection, Smc, Rmsmc];
 }
 
 /// The defensive floor of cdf, smc and rejection: a VPL's weight is at most (1 + eps) / eps

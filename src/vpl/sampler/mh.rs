@@ -21,7 +21,7 @@
 //!   view raises the rate so chains follow it. `d` depends on the pool only, never on the
 //!   chains' states, so each frame's step is a lazy MH kernel that keeps that frame's target.
 
-use super::common::{cdf_draw, key, mh_accept, weighted, Candidates, Key};
+use super::common::{cdf_draw, key, mh_accept, tv_change, weighted, Candidates, Key};
 use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
@@ -107,42 +107,7 @@ impl Mh {
     /// Total-variation distance between the pool's normalized target last frame and now, over
     /// the paths that were in the pool both frames (0 on the first frame).
     fn change(&self, pool: &Candidates) -> f32 {
-        use std::collections::HashSet;
-        if self.last_pool.is_empty() {
-            return 0.0;
-        }
-        let now_paths: HashSet<u64> = pool.vpls.iter().map(|v| v.path).collect();
-        let before_paths: HashSet<u64> = self.last_pool.keys().map(|k| k.0).collect();
-        let now: Vec<(Key, f64)> = pool
-            .vpls
-            .iter()
-            .zip(&pool.raw)
-            .filter(|(v, _)| before_paths.contains(&v.path))
-            .map(|(v, &i)| (key(v), i as f64))
-            .collect();
-        let before: HashMap<Key, f64> = self
-            .last_pool
-            .iter()
-            .filter(|(k, _)| now_paths.contains(&k.0))
-            .map(|(&k, &i)| (k, i as f64))
-            .collect();
-        let (sn, sb) = (
-            now.iter().map(|x| x.1).sum::<f64>(),
-            before.values().sum::<f64>(),
-        );
-        if sn <= 0.0 || sb <= 0.0 {
-            return if sn == sb { 0.0 } else { 1.0 };
-        }
-        let mut matched = 0.0f64;
-        let mut d = 0.0f64;
-        for (k, i) in &now {
-            let b = before.get(k).copied().unwrap_or(0.0);
-            matched += b;
-            d += (i / sn - b / sb).abs();
-        }
-        // VPLs of last frame that are gone (their paths got shorter).
-        d += (sb - matched).max(0.0) / sb;
-        (0.5 * d).min(1.0) as f32
+        tv_change(&self.last_pool, &pool.vpls, &pool.raw)
     }
 
     /// One step of every chain: re-evaluated current states, proposals from fresh candidates

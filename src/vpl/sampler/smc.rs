@@ -59,19 +59,19 @@ use std::time::Instant;
 
 /// One slot's particle.
 #[derive(Clone, Copy, Debug)]
-struct Particle {
-    path: u64,
+pub(super) struct Particle {
+    pub(super) path: u64,
     /// Picks the vertex within the path (inverse CDF of `P(d)`).
-    xi: f32,
+    pub(super) xi: f32,
     /// The slot's weight, `(mean importance of the candidate paths) / (N * importance of this
     /// path)` at birth.
-    w: f32,
+    pub(super) w: f32,
     /// The path's importance (without floors) and the vertex floor, at birth.
     i: f32,
     floor: f32,
     /// The VPL in the last frame where the path had one (stands in, with no power, while it
     /// has none).
-    last: Vpl,
+    pub(super) last: Vpl,
 }
 
 pub struct Smc {
@@ -119,7 +119,7 @@ pub fn pick_vertex(imp: &[f32], floor: f32, xi: f32) -> (usize, f32) {
 
 /// A path's vertices in this frame with their importance (skipped for a single vertex, whose
 /// pick needs none, unless `always`).
-fn vertices(
+pub(super) fn vertices(
     frame: &Frame,
     tracer: &Tracer,
     points: &[CameraPoint],
@@ -255,15 +255,15 @@ fn particle_vpl(pa: &mut Particle, vs: &[Vpl], imp: &[f32]) -> (Vpl, f32) {
 
 /// What the newborns of a frame are: each particle with its vertices and their importance,
 /// and the candidates' paths, their seconds and `b` (None: no candidate left a vertex).
-struct Newborns {
-    born: Vec<(Particle, Vec<Vpl>, Vec<f32>)>,
-    paths_s: f64,
-    paths: u64,
-    b: Option<f32>,
+pub(super) struct Newborns {
+    pub(super) born: Vec<(Particle, Vec<Vpl>, Vec<f32>)>,
+    pub(super) paths_s: f64,
+    pub(super) paths: u64,
+    pub(super) b: Option<f32>,
 }
 
 /// `k` newborn particles drawn as cdf draws them from the frame's candidate paths.
-fn newborns(
+pub(super) fn newborns(
     frame: &Frame,
     tracer: &Tracer,
     points: &[CameraPoint],
