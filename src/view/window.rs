@@ -124,7 +124,7 @@ impl Handler {
         );
         let painter = egui_wgpu::Renderer::new(&gpu.device, format, Default::default());
         let gpu = Arc::new(gpu);
-        let mut start = self.view.start();
+        let mut start = self.view.start()?;
         if !start.fixed_size {
             // The room for the images: the window less the panel, at most --size.
             let h = start.render.sequence.size.height.min(room(inner.height));
@@ -183,7 +183,13 @@ impl Handler {
         }
         let raw = r.state.take_egui_input(&r.window);
         let mut asked = (Vec::new(), false);
+        // `C`'s text onto the clipboard (egui-winit's: X11 or Wayland; where there is none it
+        // only logs, and the text is on stdout and in the panel anyway).
+        let mut clip = r.app.clipboard.take();
         let out = r.egui.run_ui(raw, |ui| {
+            if let Some(text) = clip.take() {
+                ui.ctx().copy_text(text);
+            }
             asked = super::panel::ui(ui, &r.app, &r.textures);
         });
         r.state
