@@ -137,10 +137,15 @@ impl Variant {
 /// images: the direct light, and the indirect light; emission and the CPU's emitter edges are
 /// in neither).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Component {
+    /// The whole frame
     #[default]
+    #[cfg_attr(feature = "cli", value(name = "frame"))]
     Full,
+    /// The direct light only
     Direct,
+    /// The indirect light only
     Indirect,
 }
 
@@ -278,6 +283,9 @@ pub struct Start {
     pub refine_after: u32,
     /// `irad compare`'s cache of references (None: no look-up).
     pub cache: Option<PathBuf>,
+    /// What the halves show, and the overlays on at the start.
+    pub component: Component,
+    pub overlays: Overlays,
 }
 
 /// The view: settings, camera, time, and its halves' renderer states.
@@ -370,8 +378,8 @@ impl App {
             moved: true,
             last_seen: None,
             heat: false,
-            component: Component::Full,
-            overlays: Overlays::default(),
+            component: start.component,
+            overlays: start.overlays,
             references: start.cache.clone().map(References::new),
             clipboard: None,
             frame_seconds: 0.0,

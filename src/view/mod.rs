@@ -40,6 +40,12 @@ pub struct View {
     /// The window's size in pixels, WxH
     #[cfg_attr(feature = "cli", arg(long, value_name = "WxH", default_value_t = View::default().window))]
     pub window: config::Size,
+    /// What the halves show at the start: the whole frame, or its direct or indirect light
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = app::Component::Full))]
+    pub show: app::Component,
+    /// Overlays on at the start (docs/view.md, "Overlays")
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_delimiter = ','))]
+    pub overlay: Vec<overlay::Overlay>,
     /// Still frames before each step up in size while nothing moves (0: never refine; see
     /// docs/view.md)
     #[cfg_attr(feature = "cli", arg(long, value_name = "N", default_value_t = View::default().refine_after))]
@@ -62,6 +68,8 @@ impl Default for View {
                 width: 1024,
                 height: 640,
             },
+            show: app::Component::Full,
+            overlay: Vec::new(),
             refine_after: 8,
             cache: config::Compare::default().cache,
         }
@@ -106,6 +114,14 @@ impl View {
             fixed_size: self.fixed_size,
             refine_after: self.refine_after,
             cache: Some(self.cache.clone()),
+            component: self.show,
+            overlays: {
+                let mut o = overlay::Overlays::default();
+                for &k in &self.overlay {
+                    o.set(k, true);
+                }
+                o
+            },
         })
     }
 }

@@ -21,11 +21,16 @@ pub struct Overlays {
     pub ism: bool,
 }
 
-/// Which overlay an [`super::app::Input::Overlay`] turns on or off.
+/// Which overlay an [`super::app::Input::Overlay`] turns on or off (`--overlay`'s words).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Overlay {
+    /// The VPLs as points, green kept and red replaced, brighter the heavier
     Vpls,
+    /// The shadow-map faces drawn: a stroke from each emitter sample along each face's axis
+    #[cfg_attr(feature = "cli", value(name = "faces"))]
     ShadowFaces,
+    /// The ISM atlas as an inset
     Ism,
 }
 
@@ -257,16 +262,31 @@ pub fn inset_box(w: u32, h: u32, aw: u32, ah: u32) -> (u32, u32, u32, u32) {
     (w - iw, h - ih, iw, ih)
 }
 
-/// Draws the atlas (nearest texel) into its [`inset_box`].
+/// Draws the atlas into its [`inset_box`]: each pixel the mean of the texels it covers (the
+/// nearest texel where the inset is the larger).
 pub fn draw_inset(rgb: &mut [u8], w: u32, h: u32, atlas: &(u32, u32, Vec<u8>)) {
     let (aw, ah, a) = atlas;
-    let (x0, y0, iw, ih) = inset_box(w, h, *aw, *ah);
-    for y in 0..ih {
-        for x in 0..iw {
-            let (ax, ay) = (x * aw / iw, y * ah / ih);
-            let s = ((ay * aw + ax) * 3) as usize;
-            let d = (((y0 + y) * w + x0 + x) * 3) as usize;
-            rgb[d..d + 3].copy_from_slice(&a[s..s + 3]);
+    let (aw, ah) = (*aw as u64, *ah as u64);
+    let (x0, y0, iw, ih) = inset_box(w, h, aw as u32, ah as u32);
+    let (iw64, ih64) = (iw as u64, ih as u64);
+    for y in 0..ih as u64 {
+        let (ya, yb) = (y * ah / ih64, ((y + 1) * ah / ih64).max(y * ah / ih64 + 1));
+        for x in 0..iw as u64 {
+            let (xa, xb) = (x * aw / iw64, ((x + 1) * aw / iw64).max(x * aw / iw64 + 1));
+            let mut sum = [0u64; 3];
+            for ty in ya..yb {
+                for tx in xa..xb {
+                    let s = ((ty * aw + tx) * 3) as usize;
+                    for c in 0..3 {
+                        sum[c] += a[s + c] as u64;
+                    }
+                }
+            }
+            let n = (yb - ya) * (xb - xa);
+            let d = (((y0 as u64 + y) * w as u64 + x0 as u64 + x) * 3) as usize;
+            for c in 0..3 {
+                rgb[d + c] = ((sum[c] + n / 2) / n) as u8;
+            }
         }
     }
 }

@@ -291,7 +291,7 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
             let size = t.size_vec2();
             // Room below for the labels, the flicker and the stages' table.
             let height = (room.y - 230.0).max(0.5 * room.y);
-            let scale = ((room.x / n - 8.0) / size.x)
+            let scale = (((room.x - 16.0 * n) / n) / size.x)
                 .min(height / size.y)
                 .max(0.05);
             ui.vertical(|ui| {

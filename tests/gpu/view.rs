@@ -29,6 +29,8 @@ fn start() -> Start {
         fixed_size: true,
         refine_after: 0,
         cache: None,
+        component: Component::Full,
+        overlays: Default::default(),
     }
 }
 
