@@ -338,6 +338,8 @@ pub struct App {
     pub render_seconds: f64,
     intervals: Vec<f64>,
     render_times: Vec<f64>,
+    /// The halves' stages (summed over the halves) of the steps `render_times` holds.
+    stage_times: Vec<Vec<(&'static str, f64)>>,
     last_step: Option<Instant>,
     /// What the view last said (a command line, a saved file, an error).
     pub message: String,
@@ -386,6 +388,7 @@ impl App {
             render_seconds: 0.0,
             intervals: Vec::new(),
             render_times: Vec::new(),
+            stage_times: Vec::new(),
             last_step: None,
             message: String::new(),
             saved: Vec::new(),
@@ -680,6 +683,22 @@ impl App {
                 self.render_times.remove(0);
             }
             self.render_seconds = median(&self.render_times);
+            // Each stage of the halves' frames (summed over the halves), over the same steps.
+            let mut stages: Vec<(&'static str, f64)> = Vec::new();
+            for o in self.halves.iter().filter_map(|h| h.output.as_ref()) {
+                for &(name, t) in &o.stages {
+                    match stages.iter_mut().find(|(n, _)| *n == name) {
+                        Some(s) => s.1 += t,
+                        None => stages.push((name, t)),
+                    }
+                }
+            }
+            self.stage_times.push(stages);
+            if self.stage_times.len() > 15 {
+                self.stage_times.remove(0);
+            }
+        } else {
+            self.stage_times.clear();
         }
         let height = self.cfg.sequence.size.height;
         if !moved {
@@ -719,6 +738,30 @@ impl App {
             }
         }
         Ok(())
+    }
+
+    /// How many steps [`App::stage_medians`] are the median of.
+    pub fn render_samples(&self) -> usize {
+        self.stage_times.len()
+    }
+
+    /// Each stage's median seconds over the last 15 steps that did not rebuild the halves
+    /// (CPU stages and GPU passes, summed over the halves), in the frames' order; with
+    /// `render_seconds` what `--screenshot` prints and benches/view_fps.py reads.
+    pub fn stage_medians(&self) -> Vec<(&'static str, f64)> {
+        let Some(last) = self.stage_times.last() else {
+            return Vec::new();
+        };
+        last.iter()
+            .map(|&(name, _)| {
+                let v: Vec<f64> = self
+                    .stage_times
+                    .iter()
+                    .map(|s| s.iter().find(|(n, _)| *n == name).map_or(0.0, |x| x.1))
+                    .collect();
+                (name, median(&v))
+            })
+            .collect()
     }
 
     /// The reference of the frame about to be rendered, if `irad compare` cached one for it:

@@ -239,15 +239,23 @@ impl Handler {
                 r.app.frame_seconds * 1e3,
                 r.app.render_seconds * 1e3,
             )?;
-            if let Some(o) = r.app.halves.first().and_then(|h| h.output.as_ref()) {
-                let stages: Vec<String> = o
-                    .stages
-                    .iter()
-                    .filter(|(_, t)| *t > 0.0)
-                    .map(|(n, t)| format!("{n} {:.2}", t * 1e3))
-                    .collect();
-                crate::outln!("stages of the last frame (ms): {}", stages.join(", "))?;
-            }
+            let stages: Vec<String> = r
+                .app
+                .stage_medians()
+                .iter()
+                .filter(|(_, t)| *t > 0.0)
+                .map(|(n, t)| format!("{n} {:.2}", t * 1e3))
+                .collect();
+            crate::outln!(
+                "stages, median of the last {} frames, summed over {} (ms): {}",
+                r.app.render_samples(),
+                if r.app.halves.len() == 1 {
+                    "the view"
+                } else {
+                    "both halves"
+                },
+                stages.join(", ")
+            )?;
         }
         for id in &out.textures_delta.free {
             r.painter.free_texture(id);
