@@ -330,6 +330,12 @@ pub struct App {
     pub references: Option<References>,
     /// What the window is to put on the clipboard (taken by it).
     pub clipboard: Option<String>,
+    /// Build new halves (a setting changed) on another thread, and a classical method's first
+    /// solve with them, while the old halves go on drawing; swapped in at the first step after
+    /// they are ready. Off: built in the step (what the tests drive); the window turns it on.
+    pub background: bool,
+    /// The halves being built on another thread.
+    building: Option<std::sync::mpsc::Receiver<Result<Vec<Half>>>>,
     /// Seconds from one step to the next, the median of the last 15 (frame rate = 1 / this).
     pub frame_seconds: f64,
     /// Seconds the halves' rendering took, the median of the last 15 steps that did not
@@ -384,6 +390,8 @@ impl App {
             overlays: start.overlays,
             references: start.cache.clone().map(References::new),
             clipboard: None,
+            background: false,
+            building: None,
             frame_seconds: 0.0,
             render_seconds: 0.0,
             intervals: Vec::new(),
@@ -423,31 +431,31 @@ impl App {
             .unwrap_or_else(|| camera::of_scene(&self.scene, self.time))
     }
 
-    fn build(&mut self) -> Result<()> {
-        let mut halves = Vec::new();
-        for v in self.variants() {
-            let mut cfg = self.cfg.clone();
-            cfg.sampler.kind = v.sampler;
-            cfg.method = v.method;
-            let mut scene = self.scene.clone();
-            if let Some(c) = &self.camera {
-                c.apply(&mut scene)?;
-            }
-            halves.push(Half {
-                sampler: v.sampler,
-                variant: v,
-                pipeline: Pipeline::new(self.gpu.clone(), scene, &cfg)?,
-                output: None,
-                flicker: Flicker::default(),
-                reference: None,
-                kept: Vec::new(),
-                seen: None,
-            });
+    /// What building the halves takes, for [`build_halves`] on this thread or another.
+    fn build_job(&self) -> BuildJob {
+        BuildJob {
+            gpu: self.gpu.clone(),
+            cfg: self.cfg.clone(),
+            variants: self.variants(),
+            scene: self.scene.clone(),
+            camera: self.camera,
+            at: (self.index, self.time),
         }
-        self.halves = halves;
+    }
+
+    fn build(&mut self) -> Result<()> {
+        let mut job = self.build_job();
+        // On this thread a classical method solves in its first frame, as before.
+        job.at.1 = f32::NAN;
+        self.halves = build_halves(job)?;
         self.rebuild = false;
         self.first_after_build = true;
         Ok(())
+    }
+
+    /// Whether new halves are being built on another thread (see [`App::background`]).
+    pub fn building(&self) -> bool {
+        self.building.is_some()
     }
 
     /// Applies one input. A change the settings refuse (a bad knob value, a scene that does
@@ -526,6 +534,9 @@ impl App {
             Input::Heat(h) => self.heat = h,
             Input::Component(c) => self.component = c,
             Input::Overlay(o, on) => self.overlays.set(o, on),
+            Input::CopyView | Input::SaveFrame if self.building.is_some() => {
+                bail!("the view is being rebuilt for the new settings: copy or save once it shows them")
+            }
             Input::CopyView => {
                 let cam = camera::rounded(&self.shown_camera());
                 self.message = format!("--camera {cam}\n{}", self.command_line());
@@ -578,8 +589,37 @@ impl App {
                 }
             }
         }
+        // New halves built on another thread: swap them in when ready.
+        if let Some(rx) = &self.building {
+            match rx.try_recv() {
+                Ok(halves) => {
+                    self.building = None;
+                    self.halves = halves?;
+                    self.first_after_build = true;
+                }
+                Err(std::sync::mpsc::TryRecvError::Empty) => {}
+                Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                    self.building = None;
+                    bail!("building the renderers failed (their thread ended)");
+                }
+            }
+        }
         if self.rebuild {
-            self.build()?;
+            if !self.background || self.halves.is_empty() {
+                self.build()?;
+            } else if self.building.is_none() {
+                // (While one is being built, a further change waits for it.)
+                let job = self.build_job();
+                let (tx, rx) = std::sync::mpsc::channel();
+                std::thread::Builder::new()
+                    .name("irad view build".into())
+                    .spawn(move || {
+                        let _ = tx.send(build_halves(job));
+                    })
+                    .map_err(|e| anyhow!("cannot start a thread to build the renderers: {e}"))?;
+                self.building = Some(rx);
+                self.rebuild = false;
+            }
         }
         let now = Instant::now();
         if let Some(last) = self.last_step {
@@ -717,8 +757,8 @@ impl App {
                 self.set_height(up);
                 self.still_steps = 0;
             }
-            // Refined: the rule waits for the view to move.
-            Some(_) if self.interactive.is_some() => {}
+            // Refined, or new halves being built: the rule waits.
+            Some(_) if self.interactive.is_some() || self.building.is_some() => {}
             _ => {
                 if let Some(h) = self
                     .auto
@@ -1018,6 +1058,47 @@ impl App {
         }
         Ok(out)
     }
+}
+
+/// What [`build_halves`] needs: the settings, the halves' variants, the scene and camera, and
+/// the frame index and time at which a classical method solves (time NaN: not here).
+struct BuildJob {
+    gpu: Arc<Gpu>,
+    cfg: config::Render,
+    variants: Vec<Variant>,
+    scene: Scene,
+    camera: Option<CameraSpec>,
+    at: (u32, f32),
+}
+
+/// Builds a renderer per variant; a classical method's renders one frame at `job.at` too, so
+/// that its solution is there (the cache keeps it) when the view's step first draws it.
+fn build_halves(job: BuildJob) -> Result<Vec<Half>> {
+    let mut halves = Vec::new();
+    for v in job.variants {
+        let mut cfg = job.cfg.clone();
+        cfg.sampler.kind = v.sampler;
+        cfg.method = v.method;
+        let mut scene = job.scene.clone();
+        if let Some(c) = &job.camera {
+            c.apply(&mut scene)?;
+        }
+        let mut pipeline = Pipeline::new(job.gpu.clone(), scene, &cfg)?;
+        if v.method != Method::Instant && job.at.1.is_finite() {
+            pipeline.render_at(job.at.0, job.at.1, false)?;
+        }
+        halves.push(Half {
+            sampler: v.sampler,
+            variant: v,
+            pipeline,
+            output: None,
+            flicker: Flicker::default(),
+            reference: None,
+            kept: Vec::new(),
+            seen: None,
+        });
+    }
+    Ok(halves)
 }
 
 /// The median of `v` (0 for none).

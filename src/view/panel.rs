@@ -70,6 +70,9 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         if app.auto.is_some() { " (auto)" } else { "" }
     ));
     ui.label(format!("adapter: {}", app.gpu.adapter.name));
+    if app.building() {
+        ui.label("building the renderers for the new settings ...");
+    }
     ui.separator();
     // Time.
     ui.horizontal(|ui| {
@@ -295,7 +298,10 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
                 .min(height / size.y)
                 .max(0.05);
             ui.vertical(|ui| {
-                ui.label(format!("{} ({})", h.variant.name(), h.variant.method.name()));
+                ui.label(match h.variant.method {
+                    crate::config::Method::Instant => format!("{} (instant)", h.variant.name()),
+                    m => format!("{} radiosity", m.name()),
+                });
                 let r = ui.add(
                     egui::Image::new(egui::load::SizedTexture::new(t.id(), size * scale))
                         .sense(Sense::click_and_drag()),

@@ -132,7 +132,9 @@ impl Handler {
                 (start.render.sequence.size.width * h / start.render.sequence.size.height).max(8);
             start.render.sequence.size.height = h;
         }
-        let app = App::new(gpu, &start)?;
+        let mut app = App::new(gpu, &start)?;
+        // Settings' rebuilds off the window's thread (the first build above is on it).
+        app.background = true;
         eprintln!(
             "irad view: {} on {} ({}), window {}x{}",
             app.cfg

@@ -354,7 +354,9 @@ fn the_overlays_show_vpls_faces_the_atlas_and_the_components() {
 #[test]
 fn the_split_view_compares_a_sampler_with_a_method() {
     let t0 = std::time::Instant::now();
-    let s = start();
+    let mut s = start();
+    // One solve, no refinement: the test's time.
+    s.render.meshing = irad::radiosity::Meshing::Uniform;
     let v = irad::view::View {
         render: s.render.clone(),
         split: vec!["cdf".into(), "progressive".into()],
@@ -565,4 +567,38 @@ fn a_still_view_refines_and_a_move_goes_back() {
     app.step().unwrap();
     assert_eq!(app.still_steps, 2);
     println!("{:.1} s", t0.elapsed().as_secs_f64());
+}
+
+/// Off the step: with `background` on (the window's setting), a settings change builds the new
+/// halves on another thread while the old ones go on drawing; they are swapped in at a step
+/// once ready. Copying or saving waits for them.
+#[test]
+fn a_settings_change_builds_off_the_step_while_the_old_halves_draw() {
+    let t0 = std::time::Instant::now();
+    let gpu = Arc::new(irad::gpu::Gpu::new(common::backend()).unwrap());
+    let mut app = App::new(gpu, &start()).unwrap();
+    app.background = true;
+    app.step().unwrap();
+    let vpls = |app: &App| app.halves[0].output.as_ref().unwrap().selection.vpls.len();
+    assert_eq!(vpls(&app), 32);
+    app.apply(Input::Vpls(16)).unwrap();
+    app.step().unwrap();
+    assert!(app.building(), "the new halves are built on another thread");
+    assert_eq!(vpls(&app), 32, "the old halves drew this frame");
+    let e = app.apply(Input::CopyView).unwrap_err();
+    assert!(format!("{e}").contains("rebuilt"), "{e}");
+    let mut steps = 0;
+    while app.building() {
+        app.step().unwrap();
+        steps += 1;
+        assert!(t0.elapsed().as_secs() < 120, "the build never finished");
+    }
+    // The step that swapped them in drew with them.
+    assert_eq!(vpls(&app), 16);
+    app.apply(Input::CopyView).unwrap();
+    assert!(app.message.contains("--vpls 16"), "{}", app.message);
+    println!(
+        "{steps} steps while building, {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
 }
