@@ -896,8 +896,9 @@ impl App {
     }
 
     /// Half `i`'s ISM atlas as the gather last read it (level 0 of the pull-push pyramid, read
-    /// back), as an image (see [`overlay::atlas_image`]); None for a classical method (no
-    /// VPLs) or before the first frame.
+    /// back; its first 2^22 texels: 1024 tiles of 64^2), as an image (see
+    /// [`overlay::atlas_image`]); None for a classical method (no VPLs) or before the first
+    /// frame.
     pub fn ism_atlas(&self, i: usize) -> Option<(u32, u32, Vec<u8>)> {
         let h = self.halves.get(i)?;
         h.output.as_ref()?;
@@ -905,7 +906,12 @@ impl App {
             return None;
         }
         let r = &h.pipeline.renderer;
-        let (tiles, size) = (r.config.slots, r.config.ism_size);
+        let size = r.config.ism_size;
+        // At most 2^22 texels (16 MB a frame): the first tiles of a large atlas.
+        let tiles = r
+            .config
+            .slots
+            .min(((1u64 << 22) / (size as u64 * size as u64)).max(1) as u32);
         let n = tiles as u64 * size as u64 * size as u64;
         let bytes = r.gpu.read_buffer(&r.passes.ism.pyramid, n * 4).ok()?;
         let values: Vec<f32> = bytes
