@@ -6,11 +6,12 @@
 
 pub mod app;
 pub mod camera;
+pub mod overlay;
 pub mod panel;
+pub mod reference;
 pub mod window;
 
 use crate::config;
-use crate::frame::SamplerKind;
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 
@@ -20,13 +21,12 @@ use std::path::PathBuf;
 pub struct View {
     #[cfg_attr(feature = "cli", command(flatten))]
     pub render: config::Render,
-    /// Start in the split view: the same camera and time rendered with samplers A (left) and
-    /// B (right), each with its own state, e.g. `cdf,mh` (overrides --sampler)
-    #[cfg_attr(
-        feature = "cli",
-        arg(long, value_name = "A,B", value_delimiter = ',', value_enum)
-    )]
-    pub split: Vec<SamplerKind>,
+    /// Start in the split view: the same camera and time rendered two ways, A (left) and B
+    /// (right), each with its own state; each a sampler (instant radiosity with it) or a
+    /// method (progressive, hierarchical, stochastic), e.g. `cdf,mh` or `cdf,progressive`
+    /// (overrides --sampler and --method)
+    #[cfg_attr(feature = "cli", arg(long, value_name = "A,B", value_delimiter = ','))]
+    pub split: Vec<String>,
     /// Render N frames, save the window's pixels (controls included) as this PNG and exit
     #[cfg_attr(feature = "cli", arg(long, value_name = "FILE"))]
     pub screenshot: Option<PathBuf>,
@@ -40,6 +40,20 @@ pub struct View {
     /// The window's size in pixels, WxH
     #[cfg_attr(feature = "cli", arg(long, value_name = "WxH", default_value_t = View::default().window))]
     pub window: config::Size,
+    /// What the halves show at the start: the whole frame, or its direct or indirect light
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = app::Component::Full))]
+    pub show: app::Component,
+    /// Overlays on at the start (docs/view.md, "Overlays")
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_delimiter = ','))]
+    pub overlay: Vec<overlay::Overlay>,
+    /// Still frames before each step up in size while nothing moves (0: never refine; see
+    /// docs/view.md)
+    #[cfg_attr(feature = "cli", arg(long, value_name = "N", default_value_t = View::default().refine_after))]
+    pub refine_after: u32,
+    /// Where `irad compare` caches its references: the flicker and error against one are shown
+    /// when the view's scene, size, camera, fps and seed have one
+    #[cfg_attr(feature = "cli", arg(long, value_name = "DIR", default_value_os_t = View::default().cache))]
+    pub cache: PathBuf,
 }
 
 impl Default for View {
@@ -54,6 +68,10 @@ impl Default for View {
                 width: 1024,
                 height: 640,
             },
+            show: app::Component::Full,
+            overlay: Vec::new(),
+            refine_after: 8,
+            cache: config::Compare::default().cache,
         }
     }
 }
@@ -63,10 +81,14 @@ impl View {
         self.render.validate()?;
         if !(self.split.is_empty() || self.split.len() == 2) {
             bail!(
-                "`split` takes two samplers A,B (left and right), not {}",
+                "`split` takes two samplers or methods A,B (left and right), not {}",
                 self.split.len()
             );
         }
+        for s in &self.split {
+            app::Variant::parse(s, &self.render)?;
+        }
+        config::check::int("`refine_after`", self.refine_after, 0, 100_000)?;
         config::check::int("`after`", self.after, 1, 100_000)?;
         if let Some(p) = &self.screenshot {
             if p.extension().is_none_or(|e| !e.eq_ignore_ascii_case("png")) {
@@ -77,18 +99,30 @@ impl View {
     }
 
     /// What the view starts with.
-    pub fn start(&self) -> app::Start {
+    pub fn start(&self) -> Result<app::Start> {
         let mut render = self.render.clone();
         let mut split = None;
-        if let [a, b] = self.split[..] {
-            render.sampler.kind = a;
-            split = Some(b);
+        if let [a, b] = &self.split[..] {
+            let a = app::Variant::parse(a, &render)?;
+            render.method = a.method;
+            render.sampler.kind = a.sampler;
+            split = Some(app::Variant::parse(b, &render)?);
         }
-        app::Start {
+        Ok(app::Start {
             render,
             split,
             fixed_size: self.fixed_size,
-        }
+            refine_after: self.refine_after,
+            cache: Some(self.cache.clone()),
+            component: self.show,
+            overlays: {
+                let mut o = overlay::Overlays::default();
+                for &k in &self.overlay {
+                    o.set(k, true);
+                }
+                o
+            },
+        })
     }
 }
 

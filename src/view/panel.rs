@@ -2,8 +2,9 @@
 //! middle (dragged to orbit and pan, scrolled to dolly), and the keys. It reads the
 //! [`App`] and answers with [`Input`]s; the window applies them.
 
-use super::app::{App, Input};
-use crate::config::{Method, KNOBS};
+use super::app::{App, Component, Input, Variant, METHODS};
+use super::overlay::Overlay;
+use crate::config::KNOBS;
 use crate::frame::SamplerKind;
 use egui::{ComboBox, DragValue, Key, PointerButton, Sense, Ui};
 
@@ -22,18 +23,21 @@ pub const KEYS: &[(&str, &str)] = &[
     ("R", "back to the scene's camera"),
     ("H", "flicker heat map on / off"),
     (
+        "1 2 3",
+        "show the whole frame, the direct light, the indirect light",
+    ),
+    (
+        "V",
+        "VPLs overlay (green kept, red replaced; brighter heavier)",
+    ),
+    ("F", "shadow-map faces overlay"),
+    ("I", "ISM atlas inset"),
+    (
         "C",
-        "print the view as --camera and `irad render` command line",
+        "copy the view as --camera and `irad render` command line (clipboard and stdout)",
     ),
     ("P", "save the frame (EXR and PNG) in --out"),
     ("Esc", "quit"),
-];
-
-const METHODS: [Method; 4] = [
-    Method::Instant,
-    Method::Progressive,
-    Method::Hierarchical,
-    Method::Stochastic,
 ];
 
 /// Draws the controls and the images; returns what the user asked for this frame, and
@@ -66,6 +70,9 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         if app.auto.is_some() { " (auto)" } else { "" }
     ));
     ui.label(format!("adapter: {}", app.gpu.adapter.name));
+    if app.building() {
+        ui.label("building the renderers for the new settings ...");
+    }
     ui.separator();
     // Time.
     ui.horizontal(|ui| {
@@ -125,11 +132,11 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
     ui.horizontal(|ui| {
         let mut on = app.split.is_some();
         if ui.checkbox(&mut on, "split view").changed() {
-            inputs.push(Input::Split(on.then_some(SamplerKind::Mh)));
+            inputs.push(Input::Split(on.then_some(SamplerKind::Mh.into())));
         }
         if let Some(b) = app.split {
-            if let Some(s) = sampler_combo(ui, "right", b) {
-                inputs.push(Input::Split(Some(s)));
+            if let Some(v) = variant_combo(ui, "right", b, app) {
+                inputs.push(Input::Split(Some(v)));
             }
         }
     });
@@ -195,6 +202,30 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         inputs.push(Input::Heat(heat));
     }
     ui.horizontal(|ui| {
+        for (c, label) in [
+            (Component::Full, "frame (1)"),
+            (Component::Direct, "direct (2)"),
+            (Component::Indirect, "indirect (3)"),
+        ] {
+            if ui.radio(app.component == c, label).clicked() && app.component != c {
+                inputs.push(Input::Component(c));
+            }
+        }
+    });
+    ui.horizontal(|ui| {
+        let ov = app.overlays;
+        for (o, on, label) in [
+            (Overlay::Vpls, ov.vpls, "VPLs (V)"),
+            (Overlay::ShadowFaces, ov.shadow_faces, "shadow faces (F)"),
+            (Overlay::Ism, ov.ism, "ISM atlas (I)"),
+        ] {
+            let mut v = on;
+            if ui.checkbox(&mut v, label).changed() {
+                inputs.push(Input::Overlay(o, v));
+            }
+        }
+    });
+    ui.horizontal(|ui| {
         if ui.button("Copy view (C)").clicked() {
             inputs.push(Input::CopyView);
         }
@@ -214,6 +245,29 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
             ui.label(format!("{k}: {what}"));
         }
     });
+}
+
+/// A sampler (instant radiosity with it) or a classical method.
+fn variant_combo(ui: &mut Ui, label: &str, current: Variant, app: &App) -> Option<Variant> {
+    let mut chosen = None;
+    ComboBox::from_label(label)
+        .selected_text(current.name())
+        .show_ui(ui, |ui| {
+            let choices =
+                SamplerKind::ALL
+                    .iter()
+                    .map(|&s| Variant::from(s))
+                    .chain(METHODS[1..].iter().map(|&m| Variant {
+                        method: m,
+                        sampler: app.cfg.sampler.kind,
+                    }));
+            for v in choices {
+                if ui.selectable_label(v == current, v.name()).clicked() {
+                    chosen = Some(v);
+                }
+            }
+        });
+    chosen.filter(|&v| v != current)
 }
 
 fn sampler_combo(ui: &mut Ui, label: &str, current: SamplerKind) -> Option<SamplerKind> {
@@ -240,11 +294,14 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
             let size = t.size_vec2();
             // Room below for the labels, the flicker and the stages' table.
             let height = (room.y - 230.0).max(0.5 * room.y);
-            let scale = ((room.x / n - 8.0) / size.x)
+            let scale = (((room.x - 16.0 * n) / n) / size.x)
                 .min(height / size.y)
                 .max(0.05);
             ui.vertical(|ui| {
-                ui.label(format!("{} ({})", h.sampler.name(), app.cfg.method.name()));
+                ui.label(match h.variant.method {
+                    crate::config::Method::Instant => format!("{} (instant)", h.variant.name()),
+                    m => format!("{} radiosity", m.name()),
+                });
                 let r = ui.add(
                     egui::Image::new(egui::load::SizedTexture::new(t.id(), size * scale))
                         .sense(Sense::click_and_drag()),
@@ -284,6 +341,44 @@ fn images(ui: &mut Ui, app: &App, textures: &[egui::TextureHandle], inputs: &mut
                     ),
                     None => "flicker: - (the view moved)".to_string(),
                 });
+                if let Some(r) = &h.reference {
+                    ui.label(format!(
+                        "against the cached reference ({} spp, frame {}): relMSE {:.4}, F1 {}",
+                        r.spp,
+                        r.frame,
+                        r.relmse,
+                        match r.f1 {
+                            Some(f1) => format!("{f1:.2e} (mean over {} frames {:.2e})", r.frames, r.mean_f1),
+                            None => "-".to_string(),
+                        }
+                    ));
+                }
+                if let Some(o) = &h.output {
+                    let ov = app.overlays;
+                    if ov.vpls && !h.kept.is_empty() {
+                        let kept = h.kept.iter().filter(|&&k| k).count();
+                        ui.label(format!(
+                            "VPLs: {} kept, {} replaced ({:.0}%)",
+                            kept,
+                            h.kept.len() - kept,
+                            100.0 * o.selection.replaced
+                        ));
+                    }
+                    if ov.shadow_faces {
+                        let d = &o.image.drawn;
+                        ui.label(format!(
+                            "shadow faces drawn this frame: {} ({} triangles; 0: maps kept)",
+                            d.shadow_faces, d.shadow_triangles
+                        ));
+                    }
+                    if ov.ism {
+                        let r = &o.image.reused;
+                        ui.label(format!(
+                            "ISM tiles: {} redrawn, {} kept",
+                            r.ism_tiles_drawn, r.ism_tiles_kept
+                        ));
+                    }
+                }
             });
         }
     });
@@ -340,6 +435,15 @@ fn keys(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) -> bool {
             (Key::Period, Input::Scrub(app.time + frame)),
             (Key::R, Input::ResetCamera),
             (Key::H, Input::Heat(!app.heat)),
+            (Key::Num1, Input::Component(Component::Full)),
+            (Key::Num2, Input::Component(Component::Direct)),
+            (Key::Num3, Input::Component(Component::Indirect)),
+            (Key::V, Input::Overlay(Overlay::Vpls, !app.overlays.vpls)),
+            (
+                Key::F,
+                Input::Overlay(Overlay::ShadowFaces, !app.overlays.shadow_faces),
+            ),
+            (Key::I, Input::Overlay(Overlay::Ism, !app.overlays.ism)),
             (Key::C, Input::CopyView),
             (Key::P, Input::SaveFrame),
         ];

@@ -124,7 +124,7 @@ impl Handler {
         );
         let painter = egui_wgpu::Renderer::new(&gpu.device, format, Default::default());
         let gpu = Arc::new(gpu);
-        let mut start = self.view.start();
+        let mut start = self.view.start()?;
         if !start.fixed_size {
             // The room for the images: the window less the panel, at most --size.
             let h = start.render.sequence.size.height.min(room(inner.height));
@@ -132,7 +132,9 @@ impl Handler {
                 (start.render.sequence.size.width * h / start.render.sequence.size.height).max(8);
             start.render.sequence.size.height = h;
         }
-        let app = App::new(gpu, &start)?;
+        let mut app = App::new(gpu, &start)?;
+        // Settings' rebuilds off the window's thread (the first build above is on it).
+        app.background = true;
         eprintln!(
             "irad view: {} on {} ({}), window {}x{}",
             app.cfg
@@ -183,7 +185,13 @@ impl Handler {
         }
         let raw = r.state.take_egui_input(&r.window);
         let mut asked = (Vec::new(), false);
+        // `C`'s text onto the clipboard (egui-winit's: X11 or Wayland; where there is none it
+        // only logs, and the text is on stdout and in the panel anyway).
+        let mut clip = r.app.clipboard.take();
         let out = r.egui.run_ui(raw, |ui| {
+            if let Some(text) = clip.take() {
+                ui.ctx().copy_text(text);
+            }
             asked = super::panel::ui(ui, &r.app, &r.textures);
         });
         r.state
@@ -233,15 +241,23 @@ impl Handler {
                 r.app.frame_seconds * 1e3,
                 r.app.render_seconds * 1e3,
             )?;
-            if let Some(o) = r.app.halves.first().and_then(|h| h.output.as_ref()) {
-                let stages: Vec<String> = o
-                    .stages
-                    .iter()
-                    .filter(|(_, t)| *t > 0.0)
-                    .map(|(n, t)| format!("{n} {:.2}", t * 1e3))
-                    .collect();
-                crate::outln!("stages of the last frame (ms): {}", stages.join(", "))?;
-            }
+            let stages: Vec<String> = r
+                .app
+                .stage_medians()
+                .iter()
+                .filter(|(_, t)| *t > 0.0)
+                .map(|(n, t)| format!("{n} {:.2}", t * 1e3))
+                .collect();
+            crate::outln!(
+                "stages, median of the last {} frames, summed over {} (ms): {}",
+                r.app.render_samples(),
+                if r.app.halves.len() == 1 {
+                    "the view"
+                } else {
+                    "both halves"
+                },
+                stages.join(", ")
+            )?;
         }
         for id in &out.textures_delta.free {
             r.painter.free_texture(id);

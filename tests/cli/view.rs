@@ -40,6 +40,12 @@ fn view_flags_are_checked_before_a_window_opens() {
     let out = common::irad(&["view", "--split", "cdf"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--split"), "{err}");
+    let out = common::irad(&["view", "--split", "cdf,radiosity"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--split") && err.contains("progressive"),
+        "{err}"
+    );
     let out = common::irad(&["view", "--screenshot", "shot.jpg"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
