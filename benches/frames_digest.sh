@@ -25,7 +25,7 @@ digest() { # label, then render arguments
 }
 extra=("$@")
 for scene in cornell cornell-orbit cornell-light cornell-box two-rooms furnace; do
-  for sampler in uniform cdf mh frozen rejection smc; do
+  for sampler in uniform cdf mh frozen rejection smc rmsmc; do
     digest "$scene $sampler" "$scene" --sampler "$sampler" --size 32x32 --frames 0..3 --vpls 64
   done
 done
