@@ -12,10 +12,10 @@
 
 use super::error_image;
 use crate::image::Hdr;
-use crate::scene::{Camera, Frame};
+use crate::scene::Frame;
 use crate::trace::Tracer;
 use anyhow::{bail, Result};
-use glam::{Vec2, Vec3};
+use glam::Vec2;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -50,23 +50,6 @@ pub fn pixel_hits(
         .collect()
 }
 
-/// The image position (pixels, x right, y down) of the direction `d` from the camera
-/// (None: behind it). The inverse of `Camera::ray_dir`.
-pub fn project_dir(camera: &Camera, d: Vec3, width: u32, height: u32) -> Option<Vec2> {
-    let z = d.dot(camera.forward);
-    if z <= 1e-6 * d.length() {
-        return None;
-    }
-    let tan = (camera.yfov * 0.5).tan();
-    let aspect = width as f32 / height as f32;
-    let sx = d.dot(camera.right) / z / (tan * aspect);
-    let sy = d.dot(camera.up) / z / tan;
-    Some(Vec2::new(
-        (sx + 1.0) * 0.5 * width as f32,
-        (1.0 - sy) * 0.5 * height as f32,
-    ))
-}
-
 /// For each pixel of frame `cur`, where the surface it sees was in frame `prev`'s image
 /// and which pixels around that position see it too, or None when it was off screen or
 /// hidden.
@@ -85,19 +68,15 @@ pub fn reproject(
             let q = match ch[i] {
                 Some(h) => {
                     let x = pf.point(h.tri as usize, h.b1, h.b2);
-                    project_dir(&pf.camera, x - pf.camera.position, width, height)?
+                    pf.camera.project(x, width, height)?
                 }
                 None => {
                     let p = Vec2::new(
                         (i as u32 % width) as f32 + 0.5,
                         (i as u32 / width) as f32 + 0.5,
                     );
-                    project_dir(
-                        &pf.camera,
-                        cf.camera.ray_dir(p, width, height),
-                        width,
-                        height,
-                    )?
+                    pf.camera
+                        .project_dir(cf.camera.ray_dir(p, width, height), width, height)?
                 }
             };
             if q.x < 0.0 || q.y < 0.0 || q.x >= width as f32 || q.y >= height as f32 {
@@ -333,6 +312,7 @@ pub fn for_scene(
 mod tests {
     use super::*;
     use crate::scene::builtin;
+    use glam::Vec3;
 
     const W: u32 = 64;
     const H: u32 = 64;

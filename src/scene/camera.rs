@@ -93,6 +93,29 @@ impl Camera {
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 
+    /// The image position (pixels, x right, y down; pixel (i, j) covers [i, i+1) x [j, j+1))
+    /// of direction `d` from the camera in a `width` x `height` image, the inverse of
+    /// [`Camera::ray_dir`]; None for a direction not in front of the camera.
+    pub fn project_dir(&self, d: Vec3, width: u32, height: u32) -> Option<Vec2> {
+        let z = d.dot(self.forward);
+        if z <= 1e-6 * d.length() {
+            return None;
+        }
+        let tan = (self.yfov * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        let sx = d.dot(self.right) / z / (tan * aspect);
+        let sy = d.dot(self.up) / z / tan;
+        Some(Vec2::new(
+            (sx + 1.0) * 0.5 * width as f32,
+            (1.0 - sy) * 0.5 * height as f32,
+        ))
+    }
+
+    /// Where point `p` falls in a `width` x `height` image ([`Camera::project_dir`]).
+    pub fn project(&self, p: Vec3, width: u32, height: u32) -> Option<Vec2> {
+        self.project_dir(p - self.position, width, height)
+    }
+
     /// View matrix (world to camera, right-handed, camera looks down -Z).
     pub fn view(&self) -> Mat4 {
         Mat4::from_cols(

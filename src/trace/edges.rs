@@ -30,21 +30,12 @@ fn emission_through(frame: &Frame, tracer: &Tracer, p: Vec2, w: u32, h: u32) -> 
 /// The pixels (x0, y0, x1, y1 inclusive) that emitter triangles can cover, one pixel wider
 /// all round; the whole image for a triangle with a corner behind the camera.
 fn emitter_rect(frame: &Frame, w: u32, h: u32) -> Option<(u32, u32, u32, u32)> {
-    let c = &frame.camera;
-    let tan = (c.yfov * 0.5).tan();
-    let aspect = w as f32 / h as f32;
     let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
     for &t in &frame.emitters.tris {
         for v in frame.tris[t as usize] {
-            let r = v - c.position;
-            let z = r.dot(c.forward);
-            if z <= 1e-6 {
+            let Some(p) = frame.camera.project(v, w, h) else {
                 return Some((0, 0, w - 1, h - 1));
-            }
-            let p = Vec2::new(
-                (r.dot(c.right) / z / (tan * aspect) + 1.0) * 0.5 * w as f32,
-                (1.0 - r.dot(c.up) / z / tan) * 0.5 * h as f32,
-            );
+            };
             lo = lo.min(p);
             hi = hi.max(p);
         }
@@ -276,6 +267,8 @@ impl Projected {
         if frame.normals[tri as usize].dot(v[0] - c.position) >= 0.0 {
             return Some(None);
         }
+        // `Camera::project` in f64: the clipped areas are differences of products of these
+        // corners, and a corner hundreds of pixels out loses the area's last digits in f32.
         let tan = (c.yfov * 0.5).tan() as f64;
         let aspect = w as f64 / h as f64;
         let mut corners = [glam::DVec2::ZERO; 3];

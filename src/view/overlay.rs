@@ -44,25 +44,6 @@ impl Overlays {
     }
 }
 
-/// Where `p` (the frame's coordinates) lands in a `w` x `h` image from `cam`: pixel position
-/// (x right, y down; pixel (i, j) covers [i, i+1) x [j, j+1)), the inverse of
-/// [`Camera::ray_dir`]; None behind the eye.
-pub fn project(cam: &Camera, p: Vec3, w: u32, h: u32) -> Option<Vec2> {
-    let d = p - cam.position;
-    let z = d.dot(cam.forward);
-    if z <= 1e-6 {
-        return None;
-    }
-    let tan = (cam.yfov * 0.5).tan();
-    let aspect = w as f32 / h as f32;
-    let sx = d.dot(cam.right) / z / (tan * aspect);
-    let sy = d.dot(cam.up) / z / tan;
-    Some(Vec2::new(
-        (sx + 1.0) * 0.5 * w as f32,
-        (1.0 - sy) * 0.5 * h as f32,
-    ))
-}
-
 /// A VPL's point: its pixel, colour and whether it was kept from the last frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Mark {
@@ -97,7 +78,7 @@ pub fn vpl_marks(cam: &Camera, vpls: &[ShadedVpl], kept: &[bool], w: u32, h: u32
         .zip(&weights)
         .enumerate()
         .filter_map(|(i, (v, &wt))| {
-            let p = project(cam, v.position, w, h)?;
+            let p = cam.project(v.position, w, h)?;
             let (x, y) = (p.x.floor() as i32, p.y.floor() as i32);
             if x < 0 || y < 0 || x >= w as i32 || y >= h as i32 {
                 return None;
@@ -195,11 +176,11 @@ pub fn draw_faces(rgb: &mut [u8], w: u32, h: u32, cam: &Camera, faces: &[(Vec3, 
         } else if zb < near {
             b = a + (b - a) * ((near - za) / (zb - za));
         }
-        let (Some(pa), Some(pb)) = (project(cam, a, w, h), project(cam, b, w, h)) else {
+        let (Some(pa), Some(pb)) = (cam.project(a, w, h), cam.project(b, w, h)) else {
             continue;
         };
         line(rgb, w, h, pa, pb, c);
-        if let Some(q) = project(cam, p, w, h) {
+        if let Some(q) = cam.project(p, w, h) {
             for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
                 put(
                     rgb,
@@ -309,10 +290,10 @@ mod tests {
             Vec2::new(0.5, 47.5),
         ] {
             let d = cam.ray_dir(p, 64, 48);
-            let q = project(&cam, cam.position + d * 3.0, 64, 48).unwrap();
+            let q = cam.project(cam.position + d * 3.0, 64, 48).unwrap();
             assert!((q - p).length() < 1e-3, "{p} {q}");
         }
-        assert_eq!(project(&cam, cam.position - cam.forward, 64, 48), None);
+        assert_eq!(cam.project(cam.position - cam.forward, 64, 48), None);
     }
 
     #[test]
