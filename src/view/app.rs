@@ -866,13 +866,16 @@ impl App {
         Some((w, ht, bytes))
     }
 
-    /// The VPL marks half `i`'s overlay draws (see [`overlay::vpl_marks`]).
-    pub fn vpl_marks(&self, i: usize) -> Vec<overlay::Mark> {
-        let Some((h, o)) = self
-            .halves
+    /// Half `i` and the last frame it rendered, if any.
+    fn last_output(&self, i: usize) -> Option<(&Half, &FrameOutput)> {
+        self.halves
             .get(i)
             .and_then(|h| Some((h, h.output.as_ref()?)))
-        else {
+    }
+
+    /// The VPL marks half `i`'s overlay draws (see [`overlay::vpl_marks`]).
+    pub fn vpl_marks(&self, i: usize) -> Vec<overlay::Mark> {
+        let Some((h, o)) = self.last_output(i) else {
             return Vec::new();
         };
         let frame = h.pipeline.scene.at(o.time);
@@ -882,11 +885,7 @@ impl App {
 
     /// The shadow-map faces of half `i`'s last frame (see [`overlay::shadow_faces`]).
     pub fn shadow_faces(&self, i: usize) -> Vec<(glam::Vec3, glam::Vec3, usize)> {
-        let Some((h, o)) = self
-            .halves
-            .get(i)
-            .and_then(|h| Some((h, h.output.as_ref()?)))
-        else {
+        let Some((h, o)) = self.last_output(i) else {
             return Vec::new();
         };
         let frame = h.pipeline.scene.at(o.time);
