@@ -178,11 +178,19 @@ def compare(irad, quick):
     }
 
 
-def mitsuba():
+def mitsuba(skip):
+    """None where Mitsuba does not import; a string saying why it was not run or did not
+    finish; else speed_vs_mitsuba.py's output and wall time."""
+    if skip:
+        return "Skipped: `--no-mitsuba` was given."
     ok = subprocess.run([sys.executable, "-c", "import mitsuba"], capture_output=True).returncode == 0
     if not ok:
         return None
-    stdout, wall = sh([sys.executable, "benches/speed_vs_mitsuba.py"])
+    try:
+        stdout, wall = sh([sys.executable, "benches/speed_vs_mitsuba.py"])
+    except RuntimeError as e:
+        why = next((l for l in str(e).splitlines() if "ERROR" in l or "Error" in l), str(e).splitlines()[0])
+        return f"Not measured: `python3 benches/speed_vs_mitsuba.py` failed: `{why.strip()}` (benches/README.md says how to set up Dr.Jit's LLVM)."
     return stdout, wall
 
 
@@ -225,6 +233,8 @@ def main():
     ap.add_argument("--quick", action="store_true", help="a smoke run: smaller, fewer frames")
     ap.add_argument("--irad", help="the irad binary (default: target/release/irad)")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release first")
+    ap.add_argument("--no-mitsuba", action="store_true",
+                    help="do not run benches/speed_vs_mitsuba.py (its first run is about an hour)")
     ap.add_argument("--cargo", action="store_true",
                     help="also time a first build (empty target folder) and cargo test --release")
     ap.add_argument("--out", default=str(DOCS / "results.md"), help="the page to write")
@@ -277,7 +287,7 @@ def main():
         costs = cargo_costs()
 
     log("Mitsuba 3?")
-    mts = mitsuba()
+    mts = mitsuba(args.no_mitsuba)
 
     load_after = load()
     total = time.monotonic() - t_start
@@ -414,6 +424,8 @@ def main():
                  "Mitsuba 3 and Dr.Jit's LLVM as benches/README.md says and run this script again "
                  "(it then runs `python3 benches/speed_vs_mitsuba.py`, whose first run path-traces a "
                  "2048-spp reference: about an hour on 2 cores).")
+    elif isinstance(mts, str):
+        L.append(mts)
     else:
         stdout, wall = mts
         L.append(f"`python3 benches/speed_vs_mitsuba.py` ({wall / 60:.1f} minutes):")
