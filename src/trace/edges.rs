@@ -1,14 +1,19 @@
-//! Emitter edges, box-filtered by ray casting: the GPU's `aa x aa` sub-samples see an emitter
-//! in whole sub-samples, so where an emitter's edge crosses a pixel its emission comes in
-//! steps of `1 / aa^2`, far brighter than anything else in the frame; as the camera or the
-//! light moves these edges crawl (on `cornell-orbit` at `--aa 2`, half of the renderer's own
-//! warped flicker was in the 1% of pixels next to the light's edges). For every pixel whose
-//! sub-samples, or its neighbours', disagree about seeing an emitter, this casts
-//! `rays x rays` camera rays over the pixel and replaces the sub-samples' mean emission with
-//! theirs (the reference's box filter); the rest of the pixel (direct and indirect light) is
-//! left as the GPU shaded it. The sub-samples are found here exactly where the G-buffer
-//! rasterizes them (`gbuffer::subsample`), with the same rule for what emits (front faces,
-//! `Frame::emission_at`).
+//! Edges box-filtered by ray casting (docs/antialiasing.md). The GPU's `aa x aa` sub-samples
+//! see a surface in whole sub-samples, so where an edge crosses a pixel its light comes in
+//! steps of `1 / aa^2`; as the camera or the light moves these steps crawl along the edge and
+//! flicker, worst at an emitter's edge, far brighter than anything else in the frame.
+//!
+//! - [`emitter_edges`]: for every pixel whose sub-samples, or its neighbours', disagree about
+//!   seeing an emitter, the box-filtered emission: each emitter triangle's projection clipped
+//!   to the pixel gives its exact area, and `rays x rays` camera rays find what hides it and
+//!   what it emits there. The caller puts it in place of the emission the GPU's sub-samples
+//!   gave the pixel; the rest of the pixel (direct and indirect light) stays as the GPU
+//!   shaded it. The sub-samples are found here exactly where the G-buffer rasterizes them
+//!   (`gbuffer::subsample`), with the same rule for what emits (front faces,
+//!   `Frame::emission_at`), but only to choose the pixels.
+//! - [`surface_edges`]: for a view-independent solution (the classical methods), the pixels
+//!   at silhouettes and creases take its light box-filtered by `rays x rays` rays in place of
+//!   its mean over the sub-samples.
 
 use super::Tracer;
 use crate::scene::camera::subsample;
