@@ -161,10 +161,21 @@ impl Pipeline {
             };
         self.last_lights.clone_from(&lights);
         lap(&mut stages, "gradient", &mut t);
-        // 7. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back (with the
+        // 7. Emitter edges box-filtered by camera rays (CPU), for the sub-samples' steps: the
+        // pixels an emitter's edge crosses and their box-filtered emission.
+        let c = &self.renderer.config;
+        let edges = crate::trace::edges::emitter_edges(
+            &frame,
+            &self.tracer,
+            c.width,
+            c.height,
+            c.aa,
+            c.edge_rays,
+        );
+        lap(&mut stages, "emitter_edges", &mut t);
+        // 8. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back (with the
         // direct and indirect parts too where emitter edges need the emission they leave).
-        let parts =
-            components || (self.renderer.config.edge_rays > 0 && !frame.emitters.tris.is_empty());
+        let parts = components || !edges.is_empty();
         let image = self.renderer.render(
             &GpuFrame {
                 frame: &frame,
@@ -191,20 +202,11 @@ impl Pipeline {
             }
             None => (image, None, None),
         };
-        // Emitter edges box-filtered by camera rays (CPU), in place of the sub-samples' steps:
-        // each edge pixel's emission (the frame less its direct and indirect parts, as the
-        // GPU's sub-samples saw it) is replaced by its box filter.
+        // Each emitter edge pixel's emission (the frame less its direct and indirect parts, as
+        // the GPU's sub-samples saw it) replaced by its box filter.
         let mut image = image;
         t = Instant::now();
         let c = &self.renderer.config;
-        let edges = crate::trace::edges::emitter_edges(
-            &frame,
-            &self.tracer,
-            c.width,
-            c.height,
-            c.aa,
-            c.edge_rays,
-        );
         if let (false, Some(d), Some(ind)) = (edges.is_empty(), &image.direct, &image.indirect) {
             for &(i, e) in &edges {
                 let o = &mut image.hdr.data[i];
@@ -213,7 +215,6 @@ impl Pipeline {
             }
             image.ldr = image.hdr.to_srgb8(c.exposure);
         }
-        lap(&mut stages, "emitter_edges", &mut t);
         // A classical method's silhouettes and creases, box-filtered by camera rays through
         // its solution (CPU), in place of the sub-samples' steps.
         if let Some(edge) = self.classical.as_ref().and_then(|c| c.edges.as_ref()) {
@@ -234,8 +235,8 @@ impl Pipeline {
                             let (e, b1, b2) = (hit.tri as usize, hit.b1, hit.b2);
                             let els = &edge.reflected.elements;
                             let n = els.normals[e];
-                            let i = &edge.indirect[e];
-                            let indirect = i[0] * (1.0 - b1 - b2) + i[1] * b1 + i[2] * b2;
+                            let b = [1.0 - b1 - b2, b1, b2];
+                            let indirect = radiosity::form_factor::at(&edge.indirect[e], b);
                             crate::trace::edges::Seen {
                                 radiance: [edge.reflected.at(e, b1, b2), indirect],
                                 plane: Some((n, n.dot(els.tris[e][0]))),
