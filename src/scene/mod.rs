@@ -67,6 +67,12 @@ impl Default for Material {
 }
 
 impl Material {
+    /// Whether this emits from both sides: `Scene::add_back_emitters` gives each of its
+    /// triangles a back-emitting twin, and each of the two is seen from its front only.
+    pub fn emits_both_sides(&self) -> bool {
+        self.double_sided && self.emission.max_element() > 0.0
+    }
+
     /// Whether anything in it varies over a surface (textures or a cut-out).
     pub fn varies(&self) -> bool {
         self.base_color_texture.is_some()
@@ -546,8 +552,7 @@ impl Frame {
         // of a lamp seen from behind (a quarter of two pixels of the textured room in
         // tests/gpu/textures.rs, 1.3% of its light).
         for (t, side) in s.iter_mut().enumerate().take(twins) {
-            let m = &self.materials[self.tri_material[t] as usize];
-            if m.double_sided && m.emission.max_element() > 0.0 {
+            if self.materials[self.tri_material[t] as usize].emits_both_sides() {
                 *side = Sides::SOLID;
             }
         }
@@ -763,10 +768,7 @@ impl Scene {
         mats: &mut Vec<u32>,
         mut attrs: Option<&mut TriAttrs>,
     ) {
-        let two_sided = |m: u32| {
-            let m = &self.materials[m as usize];
-            m.double_sided && m.emission.max_element() > 0.0
-        };
+        let two_sided = |m: u32| self.materials[m as usize].emits_both_sides();
         if !mats.iter().any(|&m| two_sided(m)) {
             return;
         }
