@@ -73,7 +73,7 @@ pub fn flip(test: &Hdr, reference: &Hdr) -> Result<f64> {
 }
 
 /// Luminance error image `e = lum(I) - lum(R)`.
-fn error_image(test: &Hdr, reference: &Hdr) -> Vec<f64> {
+pub fn error_image(test: &Hdr, reference: &Hdr) -> Vec<f64> {
     test.data
         .iter()
         .zip(&reference.data)

@@ -8,7 +8,7 @@
 
 use super::camera;
 use super::overlay::{self, Overlay, Overlays};
-use super::reference::{self, AgainstReference, References};
+use super::reference::{AgainstReference, References};
 use crate::config::{self, CameraSpec, Method, Size};
 use crate::frame::{FrameOutput, Pipeline, SamplerKind};
 use crate::gpu::Gpu;
@@ -675,7 +675,7 @@ impl App {
                 Some((spp, f, r)) => {
                     let img = &out.image.hdr;
                     let relmse = crate::metrics::frame_error(img, r)?.rel_mse;
-                    let error = reference::error_of(img, r);
+                    let error = crate::metrics::error_image(img, r);
                     let last = h.reference.take();
                     // The frame before's error: the same frame (nothing moved) or the one
                     // before it (playing).
@@ -689,7 +689,7 @@ impl App {
                             error
                                 .iter()
                                 .zip(&l.error)
-                                .map(|(a, b)| (a - b).abs() as f64)
+                                .map(|(a, b)| (a - b).abs())
                                 .sum::<f64>()
                                 / n
                         });

@@ -7,7 +7,6 @@
 use crate::commands::compare::{plan, reference_cache};
 use crate::config::{self, CameraSpec};
 use crate::image::Hdr;
-use crate::math::luminance;
 use std::path::{Path, PathBuf};
 
 /// The cache's root (`--cache`) and what was last looked up there.
@@ -109,16 +108,6 @@ fn find(root: &Path, spec: &str, seq: config::Sequence) -> Option<(PathBuf, u32)
     best
 }
 
-/// The error image e = lum(I) - lum(R), per pixel.
-pub fn error_of(image: &Hdr, reference: &Hdr) -> Vec<f32> {
-    image
-        .data
-        .iter()
-        .zip(&reference.data)
-        .map(|(a, b)| luminance(*a) - luminance(*b))
-        .collect()
-}
-
 /// A half's frame against the cached reference of its time: relMSE, and the flicker F1 =
 /// mean over pixels of |e_t - e_t-1| (`irad metrics`' F1) when the last frame had one too.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -132,5 +121,5 @@ pub struct AgainstReference {
     pub mean_f1: f64,
     pub frames: u32,
     /// This frame's error image (for the next frame's F1).
-    pub error: Vec<f32>,
+    pub error: Vec<f64>,
 }
