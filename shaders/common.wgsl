@@ -66,6 +66,10 @@ struct FrameConstants {
     textured: u32, // 1: `surface` holds each sample's albedo and emission
     near_grid: u32,
     ism_level1: u32, // where level 1 of the ISM pyramid starts (0: no pull-push levels)
+    direct_clamp: f32, // emitter triangles' samples clamped at this distance (0: not; `compensation` adds the rest)
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // Orthonormal basis (t, b) around unit n (Duff et al. 2017), the same as math::basis.

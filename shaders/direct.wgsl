@@ -149,7 +149,13 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         if stored > 0.0 && stored < dist - bias {
             continue;
         }
-        sum += ls.radiance.xyz * (f * cos_x / d2);
+        // A point on an emitter triangle (kind 0) closer than the clamp, like a VPL, gives
+        // what it gives at the clamp (`compensation` adds back the rest by rays).
+        var d2c = d2;
+        if kind == 0u {
+            d2c = max(d2, p.direct_clamp * p.direct_clamp);
+        }
+        sum += ls.radiance.xyz * (f * cos_x / d2c);
     }
     direct[pix] = vec4f(sum * f32(share) * select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u) / PI, 1.0);
 }

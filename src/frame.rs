@@ -182,6 +182,11 @@ impl Pipeline {
                 vpls: &selection.shaded,
                 emitter_samples: &lights,
                 clamp: s.clamp,
+                direct_clamp: if self.renderer.config.compensate > 0 && self.classical.is_none() {
+                    s.clamp
+                } else {
+                    0.0
+                },
                 near: &near,
                 gradient: gradient.as_ref(),
             },
@@ -266,8 +271,6 @@ impl Pipeline {
         // Clamping-bias compensation (CPU): pixel surfaces, emitter samples, VPLs, clamp ->
         // the light the clamp left out near creases, added to the pixels (and the indirect).
         if c.compensate > 0 && self.classical.is_none() {
-            let points =
-                crate::reference::twin::pixel_points(&frame, &self.tracer, c.width, c.height);
             let light = crate::compensation::Light {
                 samples: &lights,
                 vpls: &selection.shaded,
@@ -276,7 +279,7 @@ impl Pipeline {
             let added = crate::compensation::compensate(
                 &frame,
                 &self.tracer,
-                &points,
+                (c.width, c.height),
                 &light,
                 c.compensate,
                 s.seed,

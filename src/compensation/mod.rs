@@ -1,27 +1,33 @@
 //! Clamping-bias compensation, on the CPU after the GPU passes (`--compensate K`, off by
-//! default): the light that the distance clamp of the gather leaves out, added back by short
-//! rays, after Kollig & Keller (2004). docs/math.md section 4 has the derivation.
+//! default): the light that the distance clamp leaves out, added back by short rays, after
+//! Kollig & Keller (2004). docs/math.md section 4 has the derivation.
 //!
-//! The gather divides by `max(d^2, clamp^2)` instead of `d^2`, so a VPL at `y` closer than
-//! `clamp` to the receiver `x` gives `1 - d^2 / clamp^2` less than it should. Summed over the
-//! VPLs and written over the directions from `x`, what is missing is
+//! The gather divides by `max(d^2, clamp^2)` instead of `d^2`, and with the compensation on
+//! the direct pass does the same for the points on emitter triangles (`direct_clamp`), so a
+//! VPL or an emitter point at `y` closer than `clamp` to the receiver `x` gives
+//! `1 - d^2 / clamp^2` less than it should. Summed over them and written over the directions
+//! from `x`, what is missing is
 //!
-//! `L_c(x) = rho_x / pi * integral of L_r(y(w)) * max(0, 1 - d^2 / clamp^2) cos(theta_x) dw`,
+//! `L_c(x) = rho_x / pi * integral of [L_e(y(w)) + L_r(y(w))] * max(0, 1 - d^2 / clamp^2) cos(theta_x) dw`,
 //!
-//! with `y(w)` the first surface along `w` at distance `d` and `L_r(y)` the light reflected
-//! there (direct and indirect, no emission: that is what the VPLs stand for). With `K`
-//! cosine-distributed rays of length `clamp` from the pixel's surface point, the estimate is
-//! `rho_x / K * sum of L_r(y_k) (1 - d_k^2 / clamp^2)`. `L_r(y)` is the frame's own estimate at
-//! `y` with exact visibility: its emitter samples, and a stratified subset of its VPLs
-//! (each weighted by the share it stands for), clamped as the gather is. The part of `L_r`
-//! that the clamp takes from `y` itself is not added back (a second-order term, left out).
+//! with `y(w)` the first surface along `w` at distance `d`, `L_e` its emission toward `x` and
+//! `L_r(y)` the light reflected there. `L_r(y)` is itself the frame's estimate at `y` (its
+//! emitter samples and VPLs, clamped, with exact visibility) plus `L_c(y)`, so the estimate is
+//! a path: from a point the pixel sees, cosine-distributed rays of length `clamp`, each hit
+//! adding its emission and its clamped estimate weighted by the product of the `1 - d^2 /
+//! clamp^2` and albedos so far, until a ray reaches no surface within `clamp` (the light from
+//! there on is the VPLs' and the emitter samples'), Russian roulette ends it, or after
+//! `MAX_BOUNCES`. Light caught between two surfaces closer than the clamp (a lamp under a
+//! ceiling, `tests/gpu/thin_gap.rs`) is then carried as the path tracer carries it.
 //!
-//! Rays exist only where surfaces meet within `clamp` (creases, corners, contacts); the random
-//! numbers of a pixel are the same every frame, so a still view's compensation is still.
+//! Each pixel's `K` paths start from `K` points spread over the pixel (a stratified set of
+//! camera rays), so a surface that covers less than a sub-sample of it (the mouth of a gap) is
+//! seen in proportion to its area. The random numbers of a pixel are the same every frame, so
+//! a still view's compensation is still.
 
 use crate::math::{cosine_hemisphere, rng};
 use crate::reference::twin::SurfacePoint;
-use crate::scene::{EmitterSample, Frame};
+use crate::scene::{EmitterSample, Frame, SampleKind};
 use crate::trace::Tracer;
 use crate::vpl::ShadedVpl;
 use glam::{Vec2, Vec3};
@@ -39,13 +45,17 @@ pub struct Light<'a> {
     pub clamp: f32,
 }
 
-/// The light the clamp left out at each pixel whose surface has another within `clamp`:
-/// (pixel index, radiance to add), from `rays` rays a pixel (0: none); `points` are the
-/// pixels' surface points (`reference::twin::pixel_points`).
+/// Bounces a compensation path takes at most (light that stays within the clamp of the
+/// surfaces it meets for longer is lost).
+pub const MAX_BOUNCES: u32 = 256;
+
+/// The light the clamp left out at each pixel of a `width x height` image that sees a
+/// surface with another within `clamp`: (pixel index, radiance to add), from `rays` paths a
+/// pixel (0: none).
 pub fn compensate(
     frame: &Frame,
     tracer: &Tracer,
-    points: &[Option<SurfacePoint>],
+    (width, height): (u32, u32),
     light: &Light,
     rays: u32,
     seed: u64,
@@ -53,71 +63,150 @@ pub fn compensate(
     if rays == 0 || light.clamp <= 0.0 || light.vpls.is_empty() && light.samples.is_empty() {
         return Vec::new();
     }
-    points
-        .par_iter()
-        .enumerate()
-        .filter_map(|(i, p)| {
-            let s = (*p)?;
-            let l = at_point(frame, tracer, &s, light, rays, &[seed, i as u64, 0xc1a3]);
-            (l != Vec3::ZERO).then_some((i, l))
+    (0..(width * height) as usize)
+        .into_par_iter()
+        .filter_map(|i| {
+            let mut r = rng(&[seed, i as u64, 0xc1a3]);
+            // Latin hypercube over the pixel: ray k in column k and a shuffled row.
+            let mut rows: Vec<u32> = (0..rays).collect();
+            for k in (1..rays as usize).rev() {
+                rows.swap(k, r.random_range(0..=k));
+            }
+            let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
+            let mut sum = Vec3::ZERO;
+            for (k, &row) in rows.iter().enumerate() {
+                let sub = Vec2::new(
+                    (k as f32 + r.random::<f32>()) / rays as f32,
+                    (row as f32 + r.random::<f32>()) / rays as f32,
+                );
+                let d = frame.camera.ray_dir(corner + sub, width, height);
+                let Some(h) = tracer.intersect(frame.camera.position, d, f32::INFINITY) else {
+                    continue;
+                };
+                let s = surface_point(frame, &h, d);
+                let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
+                sum += path(frame, tracer, &s, light, (u, MAX_BOUNCES), &mut r);
+            }
+            (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
         })
         .collect()
 }
 
-/// `L_c` at surface point `s` from `rays` stratified rays drawn from the stream `stream`.
-pub fn at_point(
+/// The side of the hit triangle that a ray along `d` meets.
+fn surface_point(frame: &Frame, h: &crate::trace::Hit, d: Vec3) -> SurfacePoint {
+    let ng = frame.normals[h.tri as usize];
+    SurfacePoint {
+        x: frame.point(h.tri as usize, h.b1, h.b2),
+        n: if ng.dot(d) < 0.0 { ng } else { -ng },
+        tri: h.tri,
+        b: Vec2::new(h.b1, h.b2),
+    }
+}
+
+/// One estimate of `L_c` at surface point `s`: a path of at most `bounces` bounces (1: the
+/// first-order term alone) whose first direction is `u` on the hemisphere's square.
+pub fn path(
     frame: &Frame,
     tracer: &Tracer,
     s: &SurfacePoint,
     light: &Light,
-    rays: u32,
-    stream: &[u64],
+    (u, bounces): (Vec2, u32),
+    r: &mut impl Rng,
 ) -> Vec3 {
-    let mut r = rng(stream);
     let clamp = light.clamp;
-    let mut sum = Vec3::ZERO;
-    for k in 0..rays {
-        let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
-        let w = cosine_hemisphere(s.n, u);
-        let Some(h) = tracer.intersect(tracer.offset(s.x, s.n, w), w, clamp) else {
-            continue;
+    let mut beta = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
+    let (mut x, mut u, mut sum) = (*s, u, Vec3::ZERO);
+    for bounce in 0..bounces.min(MAX_BOUNCES) {
+        let w = cosine_hemisphere(x.n, u);
+        let Some(h) = tracer.intersect(tracer.offset(x.x, x.n, w), w, clamp) else {
+            break;
         };
         let weight = 1.0 - (h.t / clamp).powi(2);
         if weight <= 0.0 {
-            continue;
+            break;
         }
-        let ng = frame.normals[h.tri as usize];
-        let y = SurfacePoint {
-            x: frame.point(h.tri as usize, h.b1, h.b2),
-            n: if ng.dot(w) < 0.0 { ng } else { -ng },
-            tri: h.tri,
-            b: Vec2::new(h.b1, h.b2),
+        beta *= weight;
+        let y = surface_point(frame, &h, w);
+        let front = frame.normals[h.tri as usize].dot(w) < 0.0;
+        let le = if front {
+            frame.emission_at(h.tri as usize, h.b1, h.b2)
+        } else {
+            Vec3::ZERO
         };
-        sum += reflected(frame, tracer, &y, light, r.random()) * weight;
+        // The first hit sums every emitter sample and VPLS_AT_HIT VPLs; later ones (inside a
+        // crevice, hundreds) one emitter sample and a few VPLs, each standing for the rest.
+        let (samples, vpls) = if bounce == 0 {
+            (usize::MAX, VPLS_AT_HIT)
+        } else {
+            (1, VPLS_LATER)
+        };
+        sum += beta * (le + reflected(frame, tracer, &y, light, r.random(), samples, vpls));
+        let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
+        beta *= rho;
+        let q = beta.max_element().min(ROULETTE);
+        if q <= 0.0 || r.random::<f32>() >= q {
+            break;
+        }
+        beta /= q;
+        (x, u) = (y, Vec2::new(r.random(), r.random()));
     }
-    let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
-    rho * sum / rays as f32
+    sum
 }
 
-/// The light reflected at `y` (direct from the emitter samples, indirect from a stratified
-/// subset of the VPLs starting at fraction `u` of them, clamped), with exact visibility.
-fn reflected(frame: &Frame, tracer: &Tracer, y: &SurfacePoint, light: &Light, u: f32) -> Vec3 {
+/// The highest probability that a compensation path goes on after a bounce (Russian
+/// roulette on its weight: albedo-1 surfaces closer than the clamp would otherwise keep it
+/// for [`MAX_BOUNCES`]).
+const ROULETTE: f32 = 0.95;
+
+/// VPLs whose light is evaluated at a compensation path's later hits.
+const VPLS_LATER: usize = 4;
+
+/// The light reflected at `y` (direct from `samples` of the emitter samples, clamped as the
+/// direct pass clamps points on emitter triangles, and indirect from a stratified subset of
+/// `vpls` VPLs starting at fraction `u` of them, clamped), with exact visibility; a subset
+/// stands for the whole by its share.
+fn reflected(
+    frame: &Frame,
+    tracer: &Tracer,
+    y: &SurfacePoint,
+    light: &Light,
+    u: f32,
+    samples: usize,
+    vpls: usize,
+) -> Vec3 {
     let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
-    let direct: Vec3 = light
-        .samples
-        .iter()
-        .filter_map(|l| l.irradiance_at(y.x, y.n))
-        .filter(|&(_, p, np)| !tracer.occluded(y.x, y.n, p, np))
-        .map(|(e, _, _)| e * rho / PI)
+    let clamp2 = light.clamp * light.clamp;
+    let subset = |n: usize, m: usize| {
+        let m = n.min(m);
+        let first = ((u * n as f32) as usize).min(n.max(1) - 1);
+        (m, (0..m).map(move |j| (first + j * n / m) % n))
+    };
+    let ns = light.samples.len();
+    let (ms, picked) = subset(ns, samples);
+    let direct: Vec3 = picked
+        .map(|j| &light.samples[j])
+        .filter_map(|l| {
+            let (e, p, np) = l.irradiance_at(y.x, y.n)?;
+            let near = if l.kind == SampleKind::Area {
+                ((y.x - p).length_squared() / clamp2).min(1.0)
+            } else {
+                1.0
+            };
+            (!tracer.occluded(y.x, y.n, p, np)).then_some(e * near)
+        })
         .sum();
+    let direct = if ms == 0 {
+        Vec3::ZERO
+    } else {
+        direct * rho / PI * (ns as f32 / ms as f32)
+    };
     let n = light.vpls.len();
-    let m = n.min(VPLS_AT_HIT);
+    let (m, picked) = subset(n, vpls);
     if m == 0 {
         return direct;
     }
-    let first = ((u * n as f32) as usize).min(n - 1);
-    let indirect: Vec3 = (0..m)
-        .map(|j| &light.vpls[(first + j * n / m) % n])
+    let indirect: Vec3 = picked
+        .map(|j| &light.vpls[j])
         .map(|v| {
             let c = v.radiance_at(y.x, y.n, rho, light.clamp);
             if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {

@@ -43,6 +43,14 @@ gpu_struct! {
         /// Where level 1 of the ISM pyramid starts (`Ism::level1`; 0: no pull-push levels):
         /// the gather reads it at level 0's holes.
         pub ism_level1: u32,
+        /// The distance at which an emitter triangle's sample stops growing as `1/d^2` in the
+        /// direct pass, as the gather clamps VPLs (0: not clamped); the clamping-bias
+        /// compensation adds back what it leaves out (`compensation`).
+        pub direct_clamp: f32,
+        /// To WGSL's size (a multiple of 16 bytes).
+        pub pad0: u32,
+        pub pad1: u32,
+        pub pad2: u32,
     }
 }
 

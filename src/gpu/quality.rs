@@ -53,8 +53,9 @@ pub struct Quality {
     /// stays as the sub-samples give it)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().edge_rays, allow_hyphen_values = true))]
     pub edge_rays: u32,
-    /// Clamping-bias compensation: K short rays a pixel (CPU) add back the light the distance
-    /// clamp leaves out where surfaces meet within --clamp (Kollig & Keller 2004; 0: off)
+    /// Clamping-bias compensation: K short paths a pixel (CPU) add back the light the distance
+    /// clamp leaves out where surfaces meet within --clamp, and the near field of emitters
+    /// (Kollig & Keller 2004; thin gaps, docs/math.md section 4; 0: off)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true))]
     pub compensate: u32,
     /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'

@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod compensation;
 mod emission;
 mod environment;
 mod helpers;

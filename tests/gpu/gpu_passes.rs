@@ -256,6 +256,7 @@ fn indirect(
         vpls,
         emitter_samples: &[],
         clamp,
+        direct_clamp: 0.0,
         near: &[],
         gradient: None,
     };

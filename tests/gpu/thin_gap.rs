@@ -217,12 +217,13 @@ fn gpu_matches_the_reference_on_a_blender_style_cornell_box() {
 const GAPS: [f32; 5] = [0.01, 0.001, 1e-4, 1e-5, 0.0];
 
 /// Frame 0 of `scene` at `size`^2 with 1024 VPLs of `sampler` (default settings otherwise, as
-/// `irad render` makes it), seed `seed`.
+/// `irad render` makes it, but for `compensate` paths a pixel), seed `seed`.
 fn gpu_frame(
     scene: &irad::scene::Scene,
     size: u32,
     sampler: irad::vpl::sampler::SamplerKind,
     seed: u64,
+    compensate: u32,
 ) -> irad::image::Hdr {
     let mut cfg = common::render_config();
     cfg.sequence.size = irad::config::Size {
@@ -232,42 +233,67 @@ fn gpu_frame(
     cfg.vpls = 1024;
     cfg.sampler.kind = sampler;
     cfg.sequence.seed = seed;
+    cfg.quality.compensate = compensate;
     cfg.backend = common::backend();
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(cfg.backend).unwrap());
     let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
     p.render_frame(0, true).unwrap().image.hdr
 }
 
-/// The sweep: every gap, double- and single-sided, the GPU frame against the reference
-/// (32 x 32, 1024 samples a pixel); prints the table and returns (gap, double, error).
-fn sweep(
-    sampler: irad::vpl::sampler::SamplerKind,
-    seed: u64,
-) -> Vec<(f32, bool, irad::metrics::FrameError)> {
+/// One row of the sweep: the gap, whether double-sided, and the GPU frame's error against
+/// the reference for each seed.
+type Row = (f32, bool, Vec<irad::metrics::FrameError>);
+
+/// The sweep: every gap, double- and single-sided, the GPU frame (`compensate` paths a pixel)
+/// of each seed against the reference (32 x 32, 1024 samples a pixel); prints the table.
+fn sweep(sampler: irad::vpl::sampler::SamplerKind, seeds: &[u64], compensate: u32) -> Vec<Row> {
     let size = 32;
-    println!("gap sweep, {sampler:?} seed {seed}, 1024 VPLs, {size}x{size}, reference 1024 spp");
-    println!("| gap | sides | relMSE | bias |");
+    println!(
+        "gap sweep, {sampler:?} seeds {seeds:?}, --compensate {compensate}, 1024 VPLs, \
+         {size}x{size}, reference 1024 spp"
+    );
+    println!("| gap | sides | relMSE (largest) | bias: mean (each seed) |");
     let mut rows = Vec::new();
     for double in [true, false] {
         for gap in GAPS {
             let scene = common::quads::load(&cornell_with_gap(gap, double));
-            let g = gpu_frame(&scene, size, sampler, seed);
             let r = common::reference_frame(&scene, size, 1024);
-            let e = irad::metrics::frame_error(&g, &r).unwrap();
             let sides = if double { "double" } else { "single" };
+            let errors: Vec<_> = seeds
+                .iter()
+                .map(|&seed| {
+                    let g = gpu_frame(&scene, size, sampler, seed, compensate);
+                    let e = irad::metrics::frame_error(&g, &r).unwrap();
+                    if e.rel_mse > 0.2 || common::show_images() {
+                        let name = format!("{}mm-{sides}-c{compensate}-s{seed}", gap * 1e3);
+                        common::save_images(TEST, &name, &g, &r);
+                    }
+                    e
+                })
+                .collect();
+            let biases: Vec<String> = errors
+                .iter()
+                .map(|e| format!("{:+.1}%", 100.0 * e.rel_bias))
+                .collect();
             println!(
-                "| {:>5.2} mm | {sides} | {:.4} | {:+.1}% |",
+                "| {:>5.2} mm | {sides} | {:.4} | {:+.1}% ({}) |",
                 gap * 1e3,
-                e.rel_mse,
-                100.0 * e.rel_bias
+                largest_mse(&errors),
+                100.0 * mean_bias(&errors),
+                biases.join(", ")
             );
-            if e.rel_mse > 0.2 || common::show_images() {
-                common::save_images(TEST, &format!("{}mm-{sides}", gap * 1e3), &g, &r);
-            }
-            rows.push((gap, double, e));
+            rows.push((gap, double, errors));
         }
     }
     rows
+}
+
+fn largest_mse(errors: &[irad::metrics::FrameError]) -> f64 {
+    errors.iter().map(|e| e.rel_mse).fold(0.0, f64::max)
+}
+
+fn mean_bias(errors: &[irad::metrics::FrameError]) -> f64 {
+    errors.iter().map(|e| e.rel_bias).sum::<f64>() / errors.len() as f64
 }
 
 const TEST: &str = "thin_gap";
@@ -278,8 +304,9 @@ const TEST: &str = "thin_gap";
 /// single-sided 1 mm relMSE 3.46.
 #[test]
 fn the_gap_sweep_against_the_reference() {
-    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, 1);
+    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, &[1], 0);
     for (gap, double, e) in rows {
+        let e = &e[0];
         // Measured with seed 1: the table in docs/math.md (seed 2 within these too). The 1 cm
         // gap's reference is itself noisy (camera paths that find the gap: relMSE 0.19 between
         // 1024 and 8192 samples a pixel) and the VPLs' mean is below it (-15%: the camera sees into
@@ -300,11 +327,36 @@ fn the_gap_sweep_against_the_reference() {
     }
 }
 
+/// The light the clamp cannot give, given back: with `--compensate 64` the camera's view into
+/// the gap's mouth and the ceiling beside the lamp (lit by emitter points closer than the
+/// clamp) are path-traced (`compensation`), and over seeds 1-4 the mean bias is within 5% at
+/// every gap, double- and single-sided. Without it (the test above, and docs/math.md) the
+/// double-sided lamp's rows were -6% to -14% over the same seeds.
+#[test]
+fn the_gap_sweep_with_compensation() {
+    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, &[1, 2, 3, 4], 64);
+    for (gap, double, e) in rows {
+        let (mse, bias) = (largest_mse(&e), mean_bias(&e));
+        // Measured (docs/math.md): the mean bias -4.2% to +4.4%; the largest relMSE 0.038
+        // at 0.1 mm and less, 0.049 and 0.063 at 1 mm, 0.30 and 1.16 at 1 cm (whose 1024-spp
+        // reference's own relMSE is about 0.19: camera paths that find the gap's mouth).
+        let mse_bound = match (gap, double) {
+            (g, _) if g >= 0.01 => f64::INFINITY,
+            (g, false) if g >= 0.001 => 0.08,
+            _ => 0.05,
+        };
+        assert!(
+            mse <= mse_bound && bias.abs() <= 0.05,
+            "gap {gap} m, double-sided {double}: relMSE {mse:.4} (bound {mse_bound}), mean bias {bias:+.3}"
+        );
+    }
+}
+
 /// The default sampler on the same sweep (a measurement: `--ignored`).
 #[test]
 #[ignore]
 fn the_gap_sweep_with_mh() {
-    sweep(irad::vpl::sampler::SamplerKind::Mh, 1);
+    sweep(irad::vpl::sampler::SamplerKind::Mh, &[1], 0);
 }
 
 /// Light paths end inside a closed mesh only when the camera is outside it: a room modelled

@@ -85,6 +85,9 @@ pub struct GpuFrame<'a> {
     pub emitter_samples: &'a [EmitterSample],
     /// Distance clamp of the gather (`--clamp`).
     pub clamp: f32,
+    /// Distance clamp of the emitter triangles' samples in the direct pass (0: none; the
+    /// gather's clamp when the clamping-bias compensation adds back what both leave out).
+    pub direct_clamp: f32,
     /// The VPLs' near-field points ([`ism::near_points`] over [`Renderer::near_directions`],
     /// in slot order), or none (then the ISMs hold the point set alone).
     pub near: &'a [ism::Point],
@@ -488,6 +491,10 @@ impl Renderer {
                 0
             },
             ism_level1: self.passes.ism.level1(),
+            direct_clamp: input.direct_clamp,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
         };
         self.gpu
             .queue
