@@ -67,7 +67,7 @@ struct FrameConstants {
     near_grid: u32,
     ism_level1: u32, // where level 1 of the ISM pyramid starts (0: no pull-push levels)
     direct_clamp: f32, // emitter triangles' samples clamped at this distance (0: not; `compensation` adds the rest)
-    pad0: u32,
+    direct_split: u32, // 1: a pixel's sub-samples split the emitter samples among them (direct.wgsl)
     pad1: u32,
     pad2: u32,
 }

@@ -9,7 +9,8 @@
 // Supersampled (P.aa = S > 1) with at least S^2 samples, the S^2 sub-samples of a pixel split
 // them: the sub-sample of tile t sums the samples j with j mod S^2 = t, scaled by S^2, so that
 // the pixel's resolve holds every sample once at the cost of one sample point per pixel
-// (with fewer samples, as from a few punctual lights, every sub-sample sums them all).
+// (with fewer samples, as from a few punctual lights, every sub-sample sums them all; and
+// with P.direct_split = 0, the classical methods', every sub-sample sums them all too).
 
 @group(0) @binding(0) var<storage, read> P: FrameConstants;
 @group(0) @binding(1) var<storage, read> tris: array<Tri>;
@@ -82,7 +83,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let size = f32(p.shadow_size);
     var sum = vec3f(0.0);
     let s = max(p.aa, 1u);
-    let share = select(1u, s * s, p.num_light_samples >= s * s);
+    let share = select(1u, s * s, p.num_light_samples >= s * s && p.direct_split != 0u);
     let first = select(0u, subsample_tile(gid.xy, vec2u(p.width, p.height), s), share > 1u);
     for (var j = first; j < p.num_light_samples; j += share) {
         let ls = lights[j];

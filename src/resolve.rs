@@ -197,6 +197,7 @@ pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
             n => n,
         },
         aa: q.aa,
+        split_light_samples: cfg.method.solver().is_none(),
         edge_rays: q.edge_rays,
         compensate: q.compensate,
         accumulate: q.accumulate,

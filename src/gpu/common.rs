@@ -47,8 +47,10 @@ gpu_struct! {
         /// direct pass, as the gather clamps VPLs (0: not clamped); the clamping-bias
         /// compensation adds back what it leaves out (`compensation`).
         pub direct_clamp: f32,
+        /// 1: supersampled, the sub-samples of a pixel split the emitter samples among them
+        /// (`RendererConfig::split_light_samples`).
+        pub direct_split: u32,
         /// To WGSL's size (a multiple of 16 bytes).
-        pub pad0: u32,
         pub pad1: u32,
         pub pad2: u32,
     }

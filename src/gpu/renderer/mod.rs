@@ -55,6 +55,13 @@ pub struct RendererConfig {
     /// Supersampling: the passes run on `aa x aa` sub-samples per pixel and `downsample`
     /// box-filters them into pixels (1: one sample at each pixel centre).
     pub aa: u32,
+    /// Supersampled, whether the sub-samples of a pixel split the emitter samples among them
+    /// (each sums `1 / aa^2` of them: one sample's work a pixel) or each sums them all
+    /// (`aa^2` times the direct pass's work). Split for instant radiosity, whose flicker is
+    /// the VPLs'; not for a classical method, whose view-independent solution otherwise
+    /// shows the split as flicker in the penumbrae (docs/radiosity.md, "Edges that hold
+    /// still").
+    pub split_light_samples: bool,
     /// Camera rays per side for the pixels at emitters' edges (`trace::edges`; 0: off).
     pub edge_rays: u32,
     /// Rays a pixel for the clamping-bias compensation (`compensation`; 0: off).
@@ -492,7 +499,7 @@ impl Renderer {
             },
             ism_level1: self.passes.ism.level1(),
             direct_clamp: input.direct_clamp,
-            pad0: 0,
+            direct_split: self.config.split_light_samples as u32,
             pad1: 0,
             pad2: 0,
         };
