@@ -234,7 +234,7 @@ def main():
     ap.add_argument("--irad", help="the irad binary (default: target/release/irad)")
     ap.add_argument("--no-build", action="store_true", help="do not run cargo build --release first")
     ap.add_argument("--no-mitsuba", action="store_true",
-                    help="do not run benches/speed_vs_mitsuba.py (its first run is about an hour)")
+                    help="do not run benches/speed_vs_mitsuba.py (its first run path-traces a 2048-spp reference: 5-6 minutes on 2 cores)")
     ap.add_argument("--cargo", action="store_true",
                     help="also time a first build (empty target folder) and cargo test --release")
     ap.add_argument("--out", default=str(DOCS / "results.md"), help="the page to write")
@@ -423,7 +423,7 @@ def main():
         L.append("Skipped: `python3 -c \"import mitsuba\"` failed on this machine. To include it, install "
                  "Mitsuba 3 and Dr.Jit's LLVM as benches/README.md says and run this script again "
                  "(it then runs `python3 benches/speed_vs_mitsuba.py`, whose first run path-traces a "
-                 "2048-spp reference: about an hour on 2 cores).")
+                 "2048-spp reference: 5-6 minutes on 2 cores).")
     elif isinstance(mts, str):
         L.append(mts)
     else:

@@ -5,7 +5,8 @@ What it does:
  1. The reference: `irad reference cornell-orbit --size 256x256 --frames 8..12 --spp 2048`
     (frames 8 to 11), made once and cached in OUT/reference (re-made only if its run.json
     does not match the scene, size, frames and spp asked for).
- 2. For each mode (--mode; by default one, every frame alone) and VPL count (256, 1024,
+ 2. For each mode (--mode; by default two: `alone:0:--accumulate 0`, every frame alone, and
+    `default:8:`, irad render's defaults, mh with 8 frames accumulated, from frame 0) and VPL count (256, 1024,
     4096), --repeat times with seeds 1, 2, 3:
     `irad render cornell-orbit --size 256x256 --frames 8..12 --vpls N --seed R+1 --out
     OUT/[TAG_]vplsN_rR` (a mode with history H renders from frame 8 - H, with its extra
@@ -239,8 +240,9 @@ def main(argv=None):
                    help="irad runs per VPL count, run r with seed r + 1 (relMSE: their mean)")
     p.add_argument("--mode", action="append",
                    help="TAG:HISTORY:ARGS, repeatable: a row per VPL count rendered from HISTORY "
-                   "frames before the measured ones with extra irad render ARGS (default: one "
-                   "mode, ':0:', every frame alone); e.g. 'acc:8:--accumulate 16' measures frames "
+                   "frames before the measured ones with extra irad render ARGS (default: two "
+                   "modes 'alone:0:--accumulate 0', every frame alone, and 'default:8:', irad render's "
+                   "defaults from frame 0); e.g. 'acc:8:--accumulate 16' measures frames "
                    "8..12 of a render from frame 0 that averages the indirect light over frames")
     p.add_argument("--out", default="out/bench/speed", help="output folder")
     p.add_argument("--ref", help="an existing `irad reference` folder to use (checked against "
@@ -257,7 +259,7 @@ def main(argv=None):
         die("--repeat, --size and --ref-spp must be positive")
     vpls = mitsuba_cornell.parse_list(a.vpls, "vpls")
     frames = parse_frames(a.frames)
-    modes = [parse_mode(m) for m in (a.mode or [":0:"])]
+    modes = [parse_mode(m) for m in (a.mode or ["alone:0:--accumulate 0", "default:8:"])]
     tags = [m[0] for m in modes]
     if len(set(tags)) != len(tags):
         die(f"--mode: each mode needs its own TAG (given: {', '.join(t.rstrip('_') or '(none)' for t in tags)})")
