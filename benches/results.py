@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Re-runs the measurements of docs/results.md and writes it, with its charts.
 
-    python3 benches/results.py            # the full run (about 10-15 minutes on 2 cores)
+    python3 benches/results.py            # the full run (about 30-40 minutes on 2 cores)
     python3 benches/results.py --quick    # a smoke run: smaller sizes, fewer frames (2-4 min)
 
 Every figure in docs/results.md comes from this script: edit the script, not the page. The
@@ -20,7 +20,9 @@ What it runs, in order (the irad binary is built first with `cargo build --relea
 4. `irad compare cornell-orbit --size 96x96 --frames 0..24 --spp 256 --vpls 256 --samplers
    uniform,cdf,mh,smc,frozen`: the relMSE / flicker table and the report's charts, copied to
    docs/results/. The path-traced reference is cached in out/results/cache, so a second run
-   only renders the samplers.
+   only renders the samplers. Then the same for `cornell`, `cornell-light`, `cornell-box`,
+   `two-rooms` and `atrium` (their tables with ratios to cdf's, the floor taken out, and
+   each one's flicker-against-error chart).
 5. With `--cargo` (off by default: it adds 15-30 minutes on 2 cores): the first build,
    `cargo build --release` into an empty target folder (out/results/fresh-target, removed
    after), then `cargo test --release --no-fail-fast` from there (building the tests, then
@@ -156,21 +158,26 @@ def bench(irad, backend, quick):
     }
 
 
-def compare(irad, quick):
-    out = WORK / "compare"
+# The other built-in scenes compared like cornell-orbit (issue 25: the five animated built-ins
+# and the atrium, each sampler at irad render's defaults otherwise).
+OTHER_SCENES = ["cornell", "cornell-light", "cornell-box", "two-rooms", "atrium"]
+
+
+def compare(irad, quick, scene="cornell-orbit"):
+    out = WORK / ("compare" if scene == "cornell-orbit" else f"compare-{scene}")
     if quick:
         flags = ["--size", "48x48", "--frames", "0..8", "--spp", "16", "--vpls", "64",
                  "--samplers", "uniform,cdf,mh,smc,frozen"]
     else:
         flags = ["--size", "96x96", "--frames", "0..24", "--spp", "256", "--vpls", "256",
                  "--samplers", "uniform,cdf,mh,smc,frozen"]
-    cmd = [irad, "compare", "cornell-orbit", *flags, "--out", out, "--cache", WORK / "cache"]
+    cmd = [irad, "compare", scene, *flags, "--out", out, "--cache", WORK / "cache"]
     _, wall = sh(cmd)
     m = json.loads((out / "metrics.json").read_text())
     page = (out / "report.html").read_text()
     verdict = re.search(r'<p class="verdict">(.*?)</p>', page, re.S)
     return {
-        "cmd": "irad compare cornell-orbit " + " ".join(flags),
+        "cmd": f"irad compare {scene} " + " ".join(map(str, flags)),
         "metrics": m,
         "verdict": verdict.group(1) if verdict else None,
         "wall": wall,
@@ -280,6 +287,16 @@ def main():
     frame = next((r["png"] for r in renders.values() if isinstance(r, dict) and r["png"].exists()), None)
     if frame:
         shutil.copyfile(frame, FIGS / "frame.png")
+
+    others = {}
+    for scene in OTHER_SCENES:
+        log(f"irad compare {scene}")
+        try:
+            others[scene] = compare(irad, args.quick, scene)
+            shutil.copyfile(others[scene]["dir"] / "charts" / "warped_flicker_error.png",
+                            FIGS / f"{scene}_warped_flicker_error.png")
+        except RuntimeError as e:
+            others[scene] = str(e).splitlines()[0]
 
     costs = None
     if args.cargo:
@@ -416,6 +433,47 @@ def main():
     L.append("")
     L.append("`results/flicker_error.png` is the same chart with plain F1.")
     L.append("")
+
+    L.append("## The other built-in scenes")
+    L.append("")
+    L.append("Each compared as above (same flags, its own cached reference): flicker (warped F1 where "
+             "the camera or an object moves, else F1) and relMSE, each also as a ratio to `cdf`'s, "
+             "with the reference's floor taken out as docs/math.md defines it (relMSE less the "
+             "floor's; flicker in quadrature, sqrt(F1^2 - floor^2)). Every sampler runs at `irad "
+             "render`'s defaults otherwise (8 frames accumulated), so the `mh` row is the default.")
+    L.append("")
+    for scene, c in others.items():
+        L.append(f"### `{scene}`")
+        L.append("")
+        if isinstance(c, str):
+            L.append(f"Not measured: `{c}`")
+            L.append("")
+            continue
+        m = c["metrics"]
+        fl = m["floor"]
+        moving = any(r["warped"]["frames"] for r in m["runs"])
+        key = "warped F1" if moving else "F1"
+        L.append(f"`{c['cmd']}` ({c['wall'] / 60:.1f} minutes).")
+        L.append("")
+
+        def own(r):
+            f1 = r["warped"]["f1"] if moving else r["metrics"]["flicker_f1"]
+            f0 = fl["warped_f1"] if moving else fl["flicker_f1"]
+            return f1, max(f1 * f1 - f0 * f0, 0.0) ** 0.5, r["metrics"]["mean_rel_mse"] - fl["rel_mse"]
+
+        base = next((own(r) for r in m["runs"] if r["sampler"] == "cdf"), None)
+        L.append(f"| sampler | s / frame | relMSE | {key} | relMSE / cdf's | {key} / cdf's |")
+        L.append("| --- | --- | --- | --- | --- | --- |")
+        for r in m["runs"]:
+            f1, fo, rel = own(r)
+            ratio = (lambda x, y: f"{x / y:.2f}" if y and y > 0 else "-")
+            L.append(f"| {r['sampler']} | {r['mean_seconds']:.3f} | {f(r['metrics']['mean_rel_mse'])} | "
+                     f"{f(f1)} | {ratio(rel, base[2]) if base else '-'} | {ratio(fo, base[1]) if base else '-'} |")
+        f0 = fl["warped_f1"] if moving else fl["flicker_f1"]
+        L.append(f"| reference floor | - | {f(fl['rel_mse'])} | {f(f0)} | - | - |")
+        L.append("")
+        L.append(f"![{scene}: flicker against error](results/{scene}_warped_flicker_error.png)")
+        L.append("")
 
     L.append("## irad against Mitsuba 3")
     L.append("")
