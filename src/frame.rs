@@ -54,6 +54,23 @@ pub struct Pipeline {
     last_lights: Vec<crate::scene::EmitterSample>,
 }
 
+/// The share of the emitters' light within the clamp of them (`compensation::near_field_share`)
+/// from which a render without `--compensate` says so: a tenth (a Cornell box: 0; the white
+/// furnace, whose walls emit, a few percent from its edges; the lamps of `tests/gpu/thin_gap.rs`,
+/// 1 cm to 0 under a ceiling: measured there).
+pub const NEAR_FIELD_NOTE: f32 = 0.1;
+
+/// Prints `note` on stderr unless this process printed it already (a compare builds a pipeline
+/// for each run).
+fn note_once(note: String) {
+    static SEEN: std::sync::Mutex<Vec<String>> = std::sync::Mutex::new(Vec::new());
+    let mut seen = SEEN.lock().unwrap_or_else(|e| e.into_inner());
+    if !seen.contains(&note) {
+        eprintln!("{note}");
+        seen.push(note);
+    }
+}
+
 impl Pipeline {
     /// Checks `cfg` (against the adapter too) and builds the pipeline for `scene` on `gpu`.
     pub fn new(gpu: Arc<Gpu>, scene: Scene, cfg: &config::Render) -> Result<Pipeline> {
@@ -66,6 +83,17 @@ impl Pipeline {
         renderer.reuse = !cfg.no_reuse;
         renderer.cull = !cfg.no_cull;
         let params = resolved.sampler;
+        if cfg.quality.compensate == 0 && resolved.radiosity.is_none() {
+            let share = crate::compensation::near_field_share(&frame0, &tracer, params.clamp);
+            if share >= NEAR_FIELD_NOTE {
+                note_once(format!(
+                    "note: scene '{}': {:.0}% of its emitters' light meets a surface within the distance clamp ({:.3}) of where it leaves them (a lamp under a ceiling, against a wall): the clamp darkens what lies that near; --compensate 16 gives it back (docs/math.md, section 4)",
+                    scene.name,
+                    100.0 * share,
+                    params.clamp
+                ));
+            }
+        }
         let sampler = Sampler::new(params.clone());
         let classical = resolved.radiosity.map(|settings| Classical {
             settings,

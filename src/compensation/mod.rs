@@ -218,3 +218,39 @@ fn reflected(
         .sum();
     direct + indirect * (n as f32 / m as f32)
 }
+
+/// Emitter samples [`near_field_share`] casts a ray from.
+pub const NEAR_FIELD_RAYS: usize = 1024;
+
+/// The share of the emitter triangles' power whose first surface lies within `clamp` of where
+/// it leaves (a lamp under a ceiling, in a recess, against a wall): [`NEAR_FIELD_RAYS`]
+/// emitter points drawn by power (`Frame::emitter_samples`, seed 1), one cosine-distributed ray
+/// from each. That light is what the clamp darkens most and what only `--compensate` gives
+/// back; 0 for a scene without emitter triangles.
+pub fn near_field_share(frame: &Frame, tracer: &Tracer, clamp: f32) -> f32 {
+    if frame.emitters.tris.is_empty() || clamp <= 0.0 {
+        return 0.0;
+    }
+    let samples = frame.emitter_samples(1, NEAR_FIELD_RAYS);
+    let mut r = rng(&[1, 0x7ea5]);
+    let (mut area, mut near) = (0usize, 0usize);
+    // Not the back-emitting twins that line a closed lamp's inside (their light ends there).
+    let live = |s: &&EmitterSample| {
+        s.kind == SampleKind::Area && !s.tri.is_some_and(|t| tracer.emits_inside_solid(t))
+    };
+    for s in samples.iter().filter(live) {
+        area += 1;
+        let w = cosine_hemisphere(s.normal, Vec2::new(r.random(), r.random()));
+        if tracer
+            .intersect_light(tracer.offset(s.position, s.normal, w), w, clamp)
+            .is_some()
+        {
+            near += 1;
+        }
+    }
+    if area == 0 {
+        0.0
+    } else {
+        near as f32 / area as f32
+    }
+}

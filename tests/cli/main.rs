@@ -8,6 +8,7 @@ mod common;
 mod cli;
 mod cluster;
 mod environment;
+mod near_field;
 mod report;
 mod runs;
 #[cfg(feature = "view")]

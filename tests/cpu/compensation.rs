@@ -81,3 +81,20 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
     assert!((mean[2] - 1.0).abs() < 0.003, "compensated {:.4}", mean[2]);
     assert!(mean[1] < 0.996, "the first bounce alone {:.4}", mean[1]);
 }
+
+/// No built-in scene gets the note of `frame::Pipeline::new` about emitters' light within the
+/// clamp (their lamps face open rooms; the furnace's walls emit, and only their edges' light
+/// meets another wall that near).
+#[test]
+fn no_built_in_scene_is_told_to_compensate() {
+    for name in irad::scene::builtin::BUILTINS.iter().map(|b| b.name) {
+        let scene = irad::scene::builtin::load(name).unwrap().unwrap();
+        let f = scene.at(0.0);
+        let t = irad::trace::Tracer::new(&f);
+        let cfg = irad::config::Render::default();
+        let clamp = irad::resolve::sampler_params(&cfg, &f, &t).clamp;
+        let share = irad::compensation::near_field_share(&f, &t, clamp);
+        println!("{name}: clamp {clamp:.4}, near field {share:.3}");
+        assert!(share < irad::frame::NEAR_FIELD_NOTE, "{name}: {share}");
+    }
+}

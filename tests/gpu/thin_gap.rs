@@ -414,3 +414,29 @@ fn light_paths_live_in_a_closed_box_only_when_the_camera_is_inside() {
         .count();
     assert_eq!(in_lamp, 0, "{in_lamp} of {} VPLs inside the lamp", v.len());
 }
+
+/// Every lamp of the sweep sends more than `frame::NEAR_FIELD_NOTE` of its light into the
+/// ceiling within the clamp, so a render of it without `--compensate` says so (the note of
+/// `frame::Pipeline::new`, tests/cli/near_field.rs); the Cornell box's lamp sends none.
+#[test]
+fn every_lamp_of_the_sweep_is_told_to_compensate() {
+    let share = |scene: &irad::scene::Scene| {
+        let f = scene.at(0.0);
+        let t = irad::trace::Tracer::new(&f);
+        let cfg = common::render_config();
+        let clamp = irad::resolve::sampler_params(&cfg, &f, &t).clamp;
+        (irad::compensation::near_field_share(&f, &t, clamp), clamp)
+    };
+    for double in [true, false] {
+        for gap in GAPS {
+            let (s, clamp) = share(&common::quads::load(&cornell_with_gap(gap, double)));
+            println!("gap {gap} m, double-sided {double}: clamp {clamp:.4}, near field {s:.3}");
+            assert!(
+                s >= irad::frame::NEAR_FIELD_NOTE,
+                "gap {gap}, {double}: {s}"
+            );
+        }
+    }
+    let cornell = irad::scene::builtin::load("cornell").unwrap().unwrap();
+    assert_eq!(share(&cornell).0, 0.0);
+}
