@@ -83,24 +83,13 @@ pub fn compensate(
                 let Some(h) = tracer.intersect(frame.camera.position, d, f32::INFINITY) else {
                     continue;
                 };
-                let s = surface_point(frame, &h, d);
+                let s = SurfacePoint::seen(frame, &h, d);
                 let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
                 sum += path(frame, tracer, &s, light, (u, MAX_BOUNCES), &mut r);
             }
             (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
         })
         .collect()
-}
-
-/// The side of the hit triangle that a ray along `d` meets.
-fn surface_point(frame: &Frame, h: &crate::trace::Hit, d: Vec3) -> SurfacePoint {
-    let ng = frame.normals[h.tri as usize];
-    SurfacePoint {
-        x: frame.point(h.tri as usize, h.b1, h.b2),
-        n: if ng.dot(d) < 0.0 { ng } else { -ng },
-        tri: h.tri,
-        b: Vec2::new(h.b1, h.b2),
-    }
 }
 
 /// One estimate of `L_c` at surface point `s`: a path of at most `bounces` bounces (1: the
@@ -126,7 +115,7 @@ pub fn path(
             break;
         }
         beta *= weight;
-        let y = surface_point(frame, &h, w);
+        let y = SurfacePoint::seen(frame, &h, w);
         let front = frame.normals[h.tri as usize].dot(w) < 0.0;
         let le = if front {
             frame.emission_at(h.tri as usize, h.b1, h.b2)

@@ -20,6 +20,19 @@ pub struct SurfacePoint {
     pub b: Vec2,
 }
 
+impl SurfacePoint {
+    /// Where a ray along `d` hits (`h`), on the side of the triangle the ray meets.
+    pub fn seen(frame: &Frame, h: &crate::trace::Hit, d: Vec3) -> SurfacePoint {
+        let ng = frame.normals[h.tri as usize];
+        SurfacePoint {
+            x: frame.point(h.tri as usize, h.b1, h.b2),
+            n: if ng.dot(d) < 0.0 { ng } else { -ng },
+            tri: h.tri,
+            b: Vec2::new(h.b1, h.b2),
+        }
+    }
+}
+
 /// The mean luminance of `img` over the pixels whose centre sees a surface (`points` from
 /// [`pixel_points`]); 0 when none does.
 pub fn mean_over_surfaces(img: &Hdr, points: &[Option<SurfacePoint>]) -> f32 {
@@ -48,15 +61,7 @@ pub fn pixel_points(
             let d = frame.camera.ray_dir(p, width, height);
             tracer
                 .intersect(frame.camera.position, d, f32::INFINITY)
-                .map(|h| {
-                    let ng = frame.normals[h.tri as usize];
-                    SurfacePoint {
-                        x: frame.point(h.tri as usize, h.b1, h.b2),
-                        n: if ng.dot(d) < 0.0 { ng } else { -ng },
-                        tri: h.tri,
-                        b: Vec2::new(h.b1, h.b2),
-                    }
-                })
+                .map(|h| SurfacePoint::seen(frame, &h, d))
         })
         .collect()
 }
