@@ -170,7 +170,7 @@ graph! {
         when: "always",
         reads: &["gbuffer", "surface", "tris", "lights", "hemicubes"],
         writes: &["direct"],
-        what: "direct light per sub-sample from the emitter samples, with hemicube visibility; where no geometry is seen, the environment",
+        what: "direct light per sub-sample from the emitter samples (shared among a pixel's sub-samples for instant radiosity, all of them in each for a classical method: `split_light_samples`), with hemicube visibility, points on emitter triangles clamped as VPLs are when `--compensate` is on (`direct_clamp`); where no geometry is seen, the environment",
         runs: always,
         encode: |r, enc, f| {
             let (gw, gh) = r.config.grid();
