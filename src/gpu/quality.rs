@@ -96,13 +96,13 @@ impl Default for Quality {
             // from 0.00356 to 0.00209 and progressive's from 0.00279 to 0.00110, their relMSE
             // from 0.0056 and 0.0020 to 0.0048 and 0.0009 (docs/antialiasing.md).
             edge_rays: 8,
-            // Off: it costs CPU time in proportion to the pixels near creases (`git show 38ba47d:README.md`,
-            // "Clamping-bias compensation").
+            // Off: 16 paths a pixel take a 256x256 Cornell frame from 0.14 s to 0.35 s (docs/math.md
+            // section 4); a render whose emitters light surfaces within the clamp says so.
             compensate: 0,
             // 8 frames, the history weighed by the light's gradient under a moving light or
-            // object: on the built-in animations at 96x96 with 256 VPLs, mh's median relMSE and
-            // warped flicker fall to 0.34-0.70x and 0.04-0.33x of plain cdf's
-            // (docs/results/default_sampler.md).
+            // object: on the built-in animations at 96x96 with 256 VPLs, against 2048-spp
+            // references, mh's median relMSE and warped flicker fall to 0.31-0.69x and
+            // 0.04-0.17x of plain cdf's (docs/results/default_sampler.md).
             accumulate: 8,
             history: HistoryMode::Gradient,
         }
