@@ -101,8 +101,8 @@ fn compensation_gives_back_the_light_the_clamp_takes_from_corners() {
         .all(|(a, b)| b.cmpge(*a).all()));
     // Measured: 988 pixels, -0.0689 without, +0.0189 with (0.27 of it, the other way), -0.0025
     // unclamped. The compensation itself is exact with exact visibility (tests/cpu
-    // compensation.rs, the furnace); what it leaves here is the ISMs' (the clamped gather at
-    // creases is brighter than with exact visibility). Before its paths went on past the
+    // compensation.rs, the furnace), so what it leaves here comes from the frame it adds to
+    // (the ISMs at creases, or the emitter samples' pattern; not measured apart). Before its paths went on past the
     // first bounce (and started from the pixel's centre only): +0.0014, which matched only
     // because the missing second bounce offset the ISMs.
     let ok = changed > 500 && without < -0.05 && with.abs() < 0.3 * without.abs();
