@@ -58,6 +58,35 @@ fn quadrants(img: &irad::image::Hdr) -> [f64; 4] {
     q.map(|v| v / (W * H / 4) as f64)
 }
 
+/// The four image quadrants' mean indirect luminance of a selection's VPLs in `frame` (traced
+/// by `tracer`), gathered with exact visibility at the pixel centres.
+fn quadrant_image<'a>(
+    frame: &'a irad::scene::Frame,
+    tracer: &'a Tracer,
+) -> impl Fn(&irad::vpl::sampler::Selection) -> [f64; 4] + 'a {
+    let points = twin::pixel_points(frame, tracer, W, H);
+    move |sel| {
+        quadrants(&twin::gather(
+            frame,
+            tracer,
+            &points,
+            W,
+            H,
+            &sel.shaded,
+            DMIN,
+        ))
+    }
+}
+
+/// The whole image's mean over the estimates (each the mean of its quadrants) and their
+/// standard deviation.
+fn whole_image(x: &[[f64; 4]]) -> (f64, f64) {
+    let v: Vec<f64> = x.iter().map(|q| q.iter().sum::<f64>() / 4.0).collect();
+    let m = v.iter().sum::<f64>() / v.len() as f64;
+    let var = v.iter().map(|y| (y - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
+    (m, var.sqrt())
+}
+
 struct Estimates {
     mean: [f64; 4],
     se: [f64; 4],
@@ -121,22 +150,12 @@ fn run_with(p: SamplerParams, frames: u64, skip: u64) -> Vec<[f64; 4]> {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let points = twin::pixel_points(&frame, &tracer, W, H);
+    let image = quadrant_image(&frame, &tracer);
     let mut s = Sampler::new(p);
     (0..frames)
         .filter_map(|f| {
             let sel = s.select(&frame, &tracer, f);
-            (f >= skip).then(|| {
-                quadrants(&twin::gather(
-                    &frame,
-                    &tracer,
-                    &points,
-                    W,
-                    H,
-                    &sel.shaded,
-                    DMIN,
-                ))
-            })
+            (f >= skip).then(|| image(&sel))
         })
         .collect()
 }
@@ -499,18 +518,7 @@ fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
     let time = |f: u64| f as f32 * 0.125;
     let last = scene.at(time(steps));
     let last_tracer = Tracer::new(&last);
-    let points = twin::pixel_points(&last, &last_tracer, W, H);
-    let image = |sel: &irad::vpl::sampler::Selection| {
-        quadrants(&twin::gather(
-            &last,
-            &last_tracer,
-            &points,
-            W,
-            H,
-            &sel.shaded,
-            DMIN,
-        ))
-    };
+    let image = quadrant_image(&last, &last_tracer);
     let seeds = 800u64;
     let (mut smc, mut uniform) = (Vec::new(), Vec::new());
     let mut old = 0usize;
@@ -549,11 +557,10 @@ fn smc_averages_to_the_uniform_estimate_under_a_moving_light() {
     }
     // The whole image: the power to see a 7% error (what particles of one vertex each, drawn
     // in frame 0, lost by frame 12: their paths' later vertices that did not exist in frame 0).
+    // Mean and standard error.
     let whole = |x: &[[f64; 4]]| {
-        let v: Vec<f64> = x.iter().map(|q| q.iter().sum::<f64>() / 4.0).collect();
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        let var = v.iter().map(|y| (y - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
-        (m, (var / v.len() as f64).sqrt())
+        let (m, sd) = whole_image(x);
+        (m, sd / (x.len() as f64).sqrt())
     };
     let ((ms, ss), (mu, su)) = (whole(&smc_raw), whole(&uniform_raw));
     let z = (ms - mu).abs() / (ss * ss + su * su).sqrt();
@@ -621,18 +628,7 @@ fn rmsmc_averages_to_the_uniform_estimate_under_a_moving_light_with_less_spread_
     let time = |f: u64| f as f32 * 0.125;
     let last = scene.at(time(steps));
     let last_tracer = Tracer::new(&last);
-    let points = twin::pixel_points(&last, &last_tracer, W, H);
-    let image = |sel: &irad::vpl::sampler::Selection| {
-        quadrants(&twin::gather(
-            &last,
-            &last_tracer,
-            &points,
-            W,
-            H,
-            &sel.shaded,
-            DMIN,
-        ))
-    };
+    let image = quadrant_image(&last, &last_tracer);
     let frames: Vec<(irad::scene::Frame, Tracer)> = (0..steps)
         .map(|f| {
             let fr = scene.at(time(f));
@@ -661,13 +657,8 @@ fn rmsmc_averages_to_the_uniform_estimate_under_a_moving_light_with_less_spread_
     for k in 0..4 {
         rm_q.assert_matches("rmsmc", &uniform_q, k);
     }
-    let whole = |x: &[[f64; 4]]| {
-        let v: Vec<f64> = x.iter().map(|q| q.iter().sum::<f64>() / 4.0).collect();
-        let m = v.iter().sum::<f64>() / v.len() as f64;
-        let var = v.iter().map(|y| (y - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64;
-        (m, var.sqrt())
-    };
-    let ((mr, sr), (ms, ss), (mu, su)) = (whole(&rm), whole(&smc), whole(&uniform));
+    let ((mr, sr), (ms, ss), (mu, su)) =
+        (whole_image(&rm), whole_image(&smc), whole_image(&uniform));
     let se = |s: f64| s / (n as f64).sqrt();
     let z = (mr - mu).abs() / (se(sr).powi(2) + se(su).powi(2)).sqrt();
     println!(
@@ -688,18 +679,7 @@ fn rmsmc_at_its_defaults_averages_to_the_uniform_estimate_on_a_fixed_frame() {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let points = twin::pixel_points(&frame, &tracer, W, H);
-    let image = |sel: &irad::vpl::sampler::Selection| {
-        quadrants(&twin::gather(
-            &frame,
-            &tracer,
-            &points,
-            W,
-            H,
-            &sel.shaded,
-            DMIN,
-        ))
-    };
+    let image = quadrant_image(&frame, &tracer);
     let defaults = SamplerKnobs::default();
     let seeds = 300u64;
     let (mut rm, mut uniform) = (Vec::new(), Vec::new());
