@@ -203,18 +203,18 @@ impl Pipeline {
         lap(&mut stages, "emitter_edges", &mut t);
         // 8. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back (with the
         // direct and indirect parts too where emitter edges need the emission they leave).
+        // With the clamping-bias compensation (instant radiosity only), the direct pass clamps
+        // points on emitter triangles as the gather clamps VPLs, and the compensation adds
+        // back what both leave out.
         let parts = components || !edges.is_empty();
+        let compensate = c.compensate > 0 && self.classical.is_none();
         let image = self.renderer.render(
             &GpuFrame {
                 frame: &frame,
                 vpls: &selection.shaded,
                 emitter_samples: &lights,
                 clamp: s.clamp,
-                direct_clamp: if self.renderer.config.compensate > 0 && self.classical.is_none() {
-                    s.clamp
-                } else {
-                    0.0
-                },
+                direct_clamp: if compensate { s.clamp } else { 0.0 },
                 near: &near,
                 gradient: gradient.as_ref(),
             },
@@ -298,7 +298,7 @@ impl Pipeline {
         }
         // Clamping-bias compensation (CPU): pixel surfaces, emitter samples, VPLs, clamp ->
         // the light the clamp left out near creases, added to the pixels (and the indirect).
-        if c.compensate > 0 && self.classical.is_none() {
+        if compensate {
             let light = crate::compensation::Light {
                 samples: &lights,
                 vpls: &selection.shaded,
