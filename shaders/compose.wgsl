@@ -57,14 +57,25 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let g = textureLoad(gbuf, vec2i(gid.xy), 0);
     var c = vec3f(0.0);
     if g.w != 0u {
-        let tri = tris[g.w - 1u];
-        if dot(tri.n.xyz, P.cam_pos.xyz - gbuffer_x(g)) > 0.0 {
-            c = select(tri.emission.xyz, surface[pix].emission.xyz, P.textured != 0u);
+        // The triangle's fields one by one, and `surface` only when textured: a pass over
+        // every sub-sample reads no more than it uses.
+        let k = g.w - 1u;
+        let tn = tris[k].n.xyz;
+        if dot(tn, P.cam_pos.xyz - gbuffer_x(g)) > 0.0 {
+            if P.textured != 0u {
+                c = surface[pix].emission.xyz;
+            } else {
+                c = tris[k].emission.xyz;
+            }
         }
         if P.aa > 1u {
             let x = gbuffer_x(g);
-            let e = indirect_of(gid.xy, x, facing(tri.n.xyz, x, P.cam_pos.xyz));
-            let ind = e * select(tri.albedo.xyz, surface[pix].albedo.xyz, P.textured != 0u);
+            let e = indirect_of(gid.xy, x, facing(tn, x, P.cam_pos.xyz));
+            var albedo = tris[k].albedo.xyz;
+            if P.textured != 0u {
+                albedo = surface[pix].albedo.xyz;
+            }
+            let ind = e * albedo;
             indirect_ss[pix] = vec4f(ind, 1.0);
             c += direct[pix].xyz + ind;
         } else {

@@ -77,9 +77,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         direct[pix] = vec4f(background(gid.xy, p), 1.0);
         return;
     }
-    let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let n = facing(tris[g.w - 1u].n.xyz, x, p.cam_pos.xyz);
     let size = f32(p.shadow_size);
     var sum = vec3f(0.0);
     let s = max(p.aa, 1u);
@@ -158,5 +157,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         }
         sum += ls.radiance.xyz * (f * cos_x / d2c);
     }
-    direct[pix] = vec4f(sum * f32(share) * select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u) / PI, 1.0);
+    var albedo = tris[g.w - 1u].albedo.xyz;
+    if p.textured != 0u {
+        albedo = surface[pix].albedo.xyz;
+    }
+    direct[pix] = vec4f(sum * f32(share) * albedo / PI, 1.0);
 }

@@ -60,9 +60,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         indirect[pix] = vec4f(0.0);
         return;
     }
-    let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let n = facing(tris[g.w - 1u].n.xyz, x, p.cam_pos.xyz);
     let texel_angle = 4.0 / f32(p.ism_size);
     let step = side * side;
     let first = ((q.y + p.shift_y) % side) * side + (q.x + p.shift_x) % side;
@@ -94,7 +93,10 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         indirect[pix] = vec4f(sum * f32(step), 1.0);
     } else {
         // Supersampled, compose applies each sub-sample's own albedo.
-        let albedo = select(select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u), vec3f(1.0), p.aa > 1u);
+        var albedo = vec3f(1.0);
+        if p.aa <= 1u {
+            albedo = select(tris[g.w - 1u].albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u);
+        }
         indirect[pix] = vec4f(sum * albedo, 1.0);
     }
 }

@@ -30,9 +30,8 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         indirect[pix] = vec4f(0.0);
         return;
     }
-    let tri = tris[g.w - 1u];
     let x = gbuffer_x(g);
-    let n = facing(tri.n.xyz, x, p.cam_pos.xyz);
+    let n = facing(tris[g.w - 1u].n.xyz, x, p.cam_pos.xyz);
     let tol = surface_tol(x, p.cam_pos.xyz);
     let side = i32(max(p.interleave, 1u));
     let even = side % 2 == 0;
@@ -67,6 +66,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     // The pixel itself always passes (weight 1): count >= 1.
     // Supersampled, compose applies each sub-sample's own albedo.
-    let albedo = select(select(tri.albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u), vec3f(1.0), p.aa > 1u);
+    var albedo = vec3f(1.0);
+    if p.aa <= 1u {
+        albedo = select(tris[g.w - 1u].albedo.xyz, surface[pix].albedo.xyz, p.textured != 0u);
+    }
     indirect[pix] = vec4f(sum / count * albedo, 1.0);
 }
