@@ -10,7 +10,8 @@ sqrt(F1^2 - floor^2) for the warped flicker F1 (the plain F1 where nothing moves
 
     python3 benches/default_sampler.py [--irad PATH] [--seeds 1,2,3,4] [--spp 256]
         [--scenes cornell,cornell-light,cornell-box,cornell-orbit,two-rooms]
-        [--configs plain,acc8] [--samplers cdf,mh,smc,frozen] [--acc-samplers cdf,mh]
+        [--configs plain,acc8,acc8-r05,acc8-r30] [--samplers cdf,mh,smc,frozen]
+        [--acc-samplers cdf,mh]
 
 Writes docs/results/default_sampler.md after every scene (stamped with the commit, the
 machine and the adapter; `--page ''` to skip) and prints the table. 96x96, 24 frames, 256
@@ -30,7 +31,13 @@ CONFIGS = {
     "acc8": ["--accumulate", "8", "--history", "gradient"],
     "acc8-keep": ["--accumulate", "8", "--history", "keep"],
     "acc8-drop": ["--accumulate", "8", "--history", "drop"],
+    # mh's chains proposing at other rates where nothing moves (--mh-rate, default 0.15; 0.05
+    # before: the 8 accumulated frames then held nearly one set of VPLs); mh only.
+    "acc8-r05": ["--accumulate", "8", "--history", "gradient", "--mh-rate", "0.05"],
+    "acc8-r30": ["--accumulate", "8", "--history", "gradient", "--mh-rate", "0.3"],
 }
+# The configurations that run mh alone (its own knob), whatever --acc-samplers says.
+MH_ONLY = {"acc8-r05", "acc8-r30"}
 
 p = argparse.ArgumentParser()
 p.add_argument("--irad", default=os.environ.get("IRAD", "target/release/irad"))
@@ -41,7 +48,7 @@ p.add_argument("--samplers", default="cdf,mh,smc,frozen",
                help="the samplers of the plain configuration")
 p.add_argument("--acc-samplers", default="cdf,mh",
                help="the samplers of the other configurations")
-p.add_argument("--configs", default="plain,acc8")
+p.add_argument("--configs", default="plain,acc8,acc8-r05,acc8-r30")
 p.add_argument("--scenes", default="cornell,cornell-light,cornell-box,cornell-orbit,two-rooms")
 p.add_argument("--out", default="out/default_sampler")
 p.add_argument("--page", default="docs/results/default_sampler.md")
@@ -78,7 +85,7 @@ def write(done):
     ]
     for scene in done:
         for c in configs:
-            for s in (samplers if c == "plain" else acc_samplers):
+            for s in (samplers if c == "plain" else ["mh"] if c in MH_ONLY else acc_samplers):
                 v = rows.get((scene, c, s))
                 if v:
                     lines.append(f"| `{scene}` | {c} | {s} | {mmm([x[0] for x in v])} | "
@@ -124,7 +131,7 @@ for i, scene in enumerate(scenes):
         by = {}
         for c in configs:
             out = os.path.join(a.out, f"{scene}-{seed}-{c}")
-            these = a.samplers if c == "plain" else a.acc_samplers
+            these = a.samplers if c == "plain" else "mh" if c in MH_ONLY else a.acc_samplers
             cmd = [a.irad, "compare", scene, "--size", "96x96", "--frames", "0..24",
                    "--spp", str(a.spp), "--vpls", str(a.vpls), "--samplers", these,
                    "--seed", str(seed), "--out", out] + CONFIGS[c]
