@@ -5,7 +5,8 @@
 //! `cargo run --release --example flicker_where -- SCENE WxH TEST REFERENCE`: TEST holds the
 //! run's frame_FFFF.exr (frames 0.., 24 fps), REFERENCE an `irad compare` cache folder with
 //! its two halves in a/ and b/ (docs/antialiasing.md quotes its output). `PER_FRAME=1` also
-//! prints each frame pair's emitter-edge share.
+//! prints each frame pair's emitter-edge share; `MAP=FILE.png` writes each pixel's flicker
+//! less the floor's (red: more, blue: less; 1.0 at 0.01 a frame pair).
 use glam::Vec3;
 use irad::image::Hdr;
 use irad::metrics::warp;
@@ -39,6 +40,8 @@ fn main() -> anyhow::Result<()> {
     let mut sum = [[0.0f64; 3]; 2];
     let mut cnt = [0usize; 3];
     let mut kept = 0usize;
+    // Per pixel: the run's warped flicker less the floor's, summed over frame pairs (`MAP`).
+    let mut excess = vec![0.0f64; (w * h) as usize];
     for t in 1..frames.len() {
         let before = (sum[0][1], sum[1][1]);
         let f = &frames[t];
@@ -73,6 +76,7 @@ fn main() -> anyhow::Result<()> {
                     }
                 }
                 if let (Some(vt), Some(vf)) = (mt[t - 1][i], mf[t - 1][i]) {
+                    excess[i] += vt - vf;
                     sum[0][class] += vt;
                     sum[1][class] += vf;
                     cnt[class] += 1;
@@ -87,6 +91,28 @@ fn main() -> anyhow::Result<()> {
                 sum[1][1] - before.1
             );
         }
+    }
+    if let Ok(path) = std::env::var("MAP") {
+        // Red where the run flickers more than the floor, blue where less, per frame pair.
+        let n = (frames.len() - 1) as f64;
+        let mut map = Hdr::new(w, h);
+        for (o, &v) in map.data.iter_mut().zip(&excess) {
+            let v = (v / n) as f32 * 100.0;
+            *o = Vec3::new(v.max(0.0), 0.0, (-v).max(0.0));
+        }
+        map.write_png(std::path::Path::new(&path), 1.0)?;
+    }
+    if let Ok(path) = std::env::var("ERR") {
+        // The middle frame's signed error against the reference (red: too bright, blue: too
+        // dark; 1.0 at a third of the reference's luminance).
+        let t = frames.len() / 2;
+        let mut map = Hdr::new(w, h);
+        for ((o, a), b) in map.data.iter_mut().zip(&test[t].data).zip(&r[t].data) {
+            let lum = |c: &Vec3| c.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+            let v = (lum(a) - lum(b)) / (lum(b) + 0.01) * 3.0;
+            *o = Vec3::new(v.max(0.0), 0.0, (-v).max(0.0));
+        }
+        map.write_png(std::path::Path::new(&path), 1.0)?;
     }
     let k = kept as f64;
     let names = ["inside", "emitter edge", "other edge"];
