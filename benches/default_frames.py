@@ -7,9 +7,11 @@ Renders `irad render` with the default settings (cornell-orbit, 256x256, 256 VPL
 frames accumulated) from frame 0 to 14 (so frames 10-13 carry the history a newcomer's
 frames carry), the path-traced reference of frames 10-13 (`irad reference --spp N`), and
 writes docs/results/default_frames.png: the default's PNG previews in the top row, the
-reference's below, frames 10 to 13 from left to right. Needs Pillow.
+reference's below, frames 10 to 13 from left to right. Needs Pillow. The reference is traced again
+only when OUT/reference holds no finished one at --spp (remove it after changing the path tracer).
 """
 import argparse
+import json
 import os
 import subprocess
 
@@ -25,8 +27,25 @@ a = p.parse_args()
 render = os.path.join(a.out, "render")
 reference = os.path.join(a.out, "reference")
 subprocess.run([a.irad, "render", "--frames", "0..14", "--out", render], check=True)
-subprocess.run([a.irad, "reference", "cornell-orbit", "--frames", "10..14", "--spp",
-                str(a.spp), "--out", reference], check=True)
+
+
+def same_reference():
+    """Whether `reference` already holds frames 10-13 at --spp (the reference does not change
+    with the renderer's settings: it is traced again only when asked for another one)."""
+    try:
+        with open(os.path.join(reference, "run.json")) as f:
+            r = json.load(f)
+    except (OSError, ValueError):
+        return False
+    s = r.get("settings", {})
+    return (r.get("scene") == "cornell-orbit" and s.get("spp") == a.spp
+            and s.get("sequence", {}).get("frames") == {"start": 10, "end": 14}
+            and not r.get("interrupted"))
+
+
+if not same_reference():
+    subprocess.run([a.irad, "reference", "cornell-orbit", "--frames", "10..14", "--spp",
+                    str(a.spp), "--out", reference], check=True)
 
 
 def frame(folder, f):

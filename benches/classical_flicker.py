@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""Do a classical radiosity solution's edges hold still (issue 29 item 3)? Runs
+
+    irad compare cornell-orbit --methods instant,progressive,hierarchical,stochastic
+        --samplers cdf --size 96x96 --frames 0..24 --vpls 256 --spp 2048 --seed S
+
+at `irad render`'s defaults otherwise (cdf with 8 frames accumulated) and the same compare
+of cdf alone with `--accumulate 0` (plain cdf, the classical VPL renderer), for seeds 1-4
+against their cached 2048-spp references, and prints each method's warped flicker F1 and
+relMSE with the reference's floor taken out as docs/math.md ("The floor of the measurement")
+defines it (sqrt(F1^2 - floor^2), relMSE - floor), and their ratios to both cdf's, min /
+median / max over the seeds.
+
+    python3 benches/classical_flicker.py [--irad PATH] [--seeds 1,2,3,4] [--spp 2048]
+        [--out out/classical_flicker] [--page docs/results/classical_flicker.md]
+
+Writes the page (stamped with the commit, the machine and the adapter; `--page ''` to skip).
+The references are those `benches/default_sampler.py` caches (out/cache): with them cached a
+run takes a few minutes; without, about half an hour a seed on 2 cores.
+"""
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+METHODS = ["progressive", "hierarchical", "stochastic"]
+
+p = argparse.ArgumentParser()
+p.add_argument("--irad", default=os.environ.get("IRAD", "target/release/irad"))
+p.add_argument("--seeds", default="1,2,3,4")
+p.add_argument("--spp", type=int, default=2048)
+p.add_argument("--out", default="out/classical_flicker")
+p.add_argument("--page", default="docs/results/classical_flicker.md")
+a = p.parse_args()
+seeds = [int(s) for s in a.seeds.split(",")]
+t0 = time.time()
+
+
+def sh(*c):
+    return subprocess.run(c, capture_output=True, text=True).stdout.strip()
+
+
+def compare(seed, tag, extra):
+    out = os.path.join(a.out, f"{tag}-{seed}")
+    cmd = [a.irad, "compare", "cornell-orbit", "--size", "96x96", "--frames", "0..24",
+           "--spp", str(a.spp), "--vpls", "256", "--samplers", "cdf", "--seed", str(seed),
+           "--out", out] + extra
+    print(f"[{time.time() - t0:6.0f} s] {' '.join(cmd[1:])}", file=sys.stderr, flush=True)
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+    with open(os.path.join(out, "metrics.json")) as f:
+        m = json.load(f)
+    fl = m["floor"]
+    runs = {}
+    for r in m["runs"]:
+        name = r["sampler"] if r["method"] == "instant" else r["method"]
+        f1 = r["warped"]["f1"]
+        runs[name] = {
+            "f1": f1,
+            "own": math.sqrt(max(f1 * f1 - fl["warped_f1"] ** 2, 0.0)),
+            "rel": r["metrics"]["mean_rel_mse"] - fl["rel_mse"],
+        }
+    return runs, fl["warped_f1"]
+
+
+rows = {}  # method -> list of (F1, own, ratio to cdf acc8, ratio to plain cdf, relMSE ratios)
+floors = []
+for seed in seeds:
+    default, floor = compare(seed, "default", ["--methods", "instant," + ",".join(METHODS)])
+    plain, _ = compare(seed, "plain", ["--accumulate", "0"])
+    floors.append(floor)
+    cdf8, cdf0 = default["cdf"], plain["cdf"]
+    for name in METHODS + ["cdf"]:
+        r = default[name]
+        rows.setdefault(name, []).append((
+            r["f1"], r["own"], r["own"] / cdf8["own"], r["own"] / cdf0["own"],
+            r["rel"] / cdf8["rel"], r["rel"] / cdf0["rel"]))
+    rows.setdefault("plain cdf", []).append((
+        cdf0["f1"], cdf0["own"], cdf0["own"] / cdf8["own"], 1.0,
+        cdf0["rel"] / cdf8["rel"], 1.0))
+
+
+def mmm(xs, digits=2):
+    return " / ".join(f"{x:.{digits}f}" for x in (min(xs), statistics.median(xs), max(xs)))
+
+
+lines = [
+    f"`cornell-orbit`, 96x96, 24 frames, 256 VPLs for cdf, {a.spp}-spp references, seeds "
+    f"{','.join(map(str, seeds))} (min / median / max over the seeds); the reference's warped "
+    f"F1 floor {mmm(floors, 6)}. Own flicker: sqrt(F1^2 - floor^2); relMSE less the floor's. "
+    f"cdf: `irad render`'s defaults (8 frames accumulated); plain cdf: `--accumulate 0`.",
+    "",
+    "| run | warped F1 | own flicker | flicker / cdf's | flicker / plain cdf's "
+    "| relMSE / cdf's | relMSE / plain cdf's |",
+    "| --- | --- | --- | --- | --- | --- | --- |",
+]
+for name, v in rows.items():
+    cols = [mmm([x[0] for x in v], 6), mmm([x[1] for x in v], 6)]
+    cols += [mmm([x[i] for x in v]) for i in range(2, 6)]
+    lines.append(f"| {name} | " + " | ".join(cols) + " |")
+lines += ["", f"({time.time() - t0:.0f} s)"]
+text = "\n".join(lines)
+print(text)
+if a.page:
+    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
+                if l.startswith("model name")), "?")
+    dirty = " + uncommitted changes" if sh("git", "status", "--porcelain", "src", "shaders",
+                                           "scenes") else ""
+    adapter = next((l for l in sh(a.irad, "info").splitlines()
+                    if "chosen" in l.lower() or "adapter" in l.lower()), "?")
+    head = [
+        "# Classical radiosity: flicker of a view-independent solution",
+        "",
+        "Written by `python3 benches/classical_flicker.py`: do not edit by hand, run the script again.",
+        "",
+        f"- commit: `{sh('git', 'rev-parse', 'HEAD')}`{dirty}",
+        f"- machine: {cpu}, {os.cpu_count()} cores; load average "
+        f"{open('/proc/loadavg').read().split()[0]} at the end",
+        f"- adapter: {adapter}",
+        "",
+        "",
+    ]
+    with open(a.page, "w") as f:
+        f.write("\n".join(head) + text + "\n")
