@@ -9,7 +9,7 @@ out as docs/math.md ("The floor of the measurement") defines it: relMSE - floor,
 sqrt(F1^2 - floor^2) for the warped flicker F1 (the plain F1 where nothing moves).
 
     python3 benches/default_sampler.py [--irad PATH] [--seeds 1,2,3,4] [--spp 256]
-        [--scenes cornell,cornell-light,cornell-box,cornell-orbit,two-rooms]
+        [--scenes cornell,cornell-light,cornell-box,cornell-orbit,two-rooms,atrium]
         [--configs plain,acc8,acc8-r05,acc8-r30] [--samplers cdf,mh,smc,frozen]
         [--acc-samplers cdf,mh]
 
@@ -49,7 +49,7 @@ p.add_argument("--samplers", default="cdf,mh,smc,frozen",
 p.add_argument("--acc-samplers", default="cdf,mh",
                help="the samplers of the other configurations")
 p.add_argument("--configs", default="plain,acc8,acc8-r05,acc8-r30")
-p.add_argument("--scenes", default="cornell,cornell-light,cornell-box,cornell-orbit,two-rooms")
+p.add_argument("--scenes", default="cornell,cornell-light,cornell-box,cornell-orbit,two-rooms,atrium")
 p.add_argument("--out", default="out/default_sampler")
 p.add_argument("--page", default="docs/results/default_sampler.md")
 a = p.parse_args()

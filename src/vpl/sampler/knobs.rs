@@ -166,8 +166,8 @@ use Range::{Float, Int};
 knobs! {
     /// MH: probability that a chain proposes in a frame where nothing moves (1: one step
     /// every frame; lower keeps VPLs longer). The rate rises with how far the target moved,
-    /// see --mh-follow [0.15: under the default 8 accumulated frames a still scene's history
-    /// then averages more than one set of VPLs, docs/results/default_sampler.md]
+    /// see --mh-follow. 0.15 by default, so that the 8 frames --accumulate averages hold more
+    /// than one set of VPLs (docs/math.md section 7, "The rate under accumulation")
     mh_rate: f32 = 0.15, "mh-rate", Float { lo: 0.0, lo_open: true, hi: 1.0 }, [Mh];
     /// MH: how fast the proposal rate follows the scene: rate = min(1, mh-rate + mh-follow *
     /// d), d the total-variation distance between the last frame's and this frame's target
