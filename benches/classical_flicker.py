@@ -27,6 +27,10 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.dont_write_bytecode = True  # no benches/__pycache__ in the work tree
+import page_stamp  # noqa: E402
+
 METHODS = ["progressive", "hierarchical", "stochastic"]
 
 p = argparse.ArgumentParser()
@@ -38,10 +42,6 @@ p.add_argument("--page", default="docs/results/classical_flicker.md")
 a = p.parse_args()
 seeds = [int(s) for s in a.seeds.split(",")]
 t0 = time.time()
-
-
-def sh(*c):
-    return subprocess.run(c, capture_output=True, text=True).stdout.strip()
 
 
 def compare(seed, tag, extra):
@@ -105,23 +105,7 @@ lines += ["", f"({time.time() - t0:.0f} s)"]
 text = "\n".join(lines)
 print(text)
 if a.page:
-    cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
-                if l.startswith("model name")), "?")
-    dirty = " + uncommitted changes" if sh("git", "status", "--porcelain", "src", "shaders",
-                                           "scenes") else ""
-    adapter = next((l for l in sh(a.irad, "info").splitlines()
-                    if "chosen" in l.lower() or "adapter" in l.lower()), "?")
-    head = [
-        "# Classical radiosity: flicker of a view-independent solution",
-        "",
-        "Written by `python3 benches/classical_flicker.py`: do not edit by hand, run the script again.",
-        "",
-        f"- commit: `{sh('git', 'rev-parse', 'HEAD')}`{dirty}",
-        f"- machine: {cpu}, {os.cpu_count()} cores; load average "
-        f"{open('/proc/loadavg').read().split()[0]} at the end",
-        f"- adapter: {adapter}",
-        "",
-        "",
-    ]
+    head = page_stamp.head("Classical radiosity: flicker of a view-independent solution",
+                           "benches/classical_flicker.py", a.irad)
     with open(a.page, "w") as f:
-        f.write("\n".join(head) + text + "\n")
+        f.write(head + text + "\n")

@@ -26,6 +26,10 @@ import subprocess
 import sys
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.dont_write_bytecode = True  # no benches/__pycache__ in the work tree
+import page_stamp  # noqa: E402
+
 CONFIGS = {
     "plain": ["--accumulate", "0"],
     "acc8": ["--accumulate", "8", "--history", "gradient"],
@@ -64,10 +68,6 @@ rows = {}  # (scene, config, sampler) -> list of (relmse ratio, flicker ratio)
 t0 = time.time()
 
 
-def sh(*c):
-    return subprocess.run(c, capture_output=True, text=True).stdout.strip()
-
-
 def mmm(xs):
     return f"{min(xs):.2f} / {statistics.median(xs):.2f} / {max(xs):.2f}"
 
@@ -95,25 +95,9 @@ def write(done):
     os.makedirs(a.out, exist_ok=True)
     open(os.path.join(a.out, "summary.md"), "w").write(text + "\n")
     if a.page:
-        cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
-                    if l.startswith("model name")), "?")
-        dirty = " + uncommitted changes" if sh("git", "status", "--porcelain", "src", "shaders",
-                                               "scenes") else ""
-        adapter = next((l for l in sh(a.irad, "info").splitlines()
-                        if "chosen" in l.lower() or "adapter" in l.lower()), "?")
-        head = [
-            "# Which sampler and accumulation by default",
-            "",
-            "Written by `python3 benches/default_sampler.py`: do not edit by hand, run the script again.",
-            "",
-            f"- commit: `{sh('git', 'rev-parse', 'HEAD')}`{dirty}",
-            f"- machine: {cpu}, {os.cpu_count()} cores; load average "
-            f"{open('/proc/loadavg').read().split()[0]} at the end",
-            f"- adapter: {adapter}",
-            "",
-            "",
-        ]
-        open(a.page, "w").write("\n".join(head) + text + "\n")
+        head = page_stamp.head("Which sampler and accumulation by default",
+                               "benches/default_sampler.py", a.irad)
+        open(a.page, "w").write(head + text + "\n")
     return text
 
 
