@@ -236,12 +236,16 @@ pub(crate) fn target(
 }
 
 impl GBuffer {
-    /// The G-buffer of a `width x height` image with `aa x aa` sub-samples per pixel.
+    /// The G-buffer of a `width x height` image with `aa x aa` sub-samples per pixel;
+    /// `plain`: the scene has no cut-outs, so no fragment is discarded: the pass draws with
+    /// `vs_sided` and `fs_plain` (single-sided triangles seen from behind left out by the
+    /// vertex stage), else with `vs` and `fs` (both tests in the fragment stage).
     pub fn new(
         gpu: &Gpu,
         (width, height, aa): (u32, u32, u32),
         textures: &super::surface::TextureData,
         tris: &wgpu::Buffer,
+        plain: bool,
     ) -> Self {
         let module = PASS.module(gpu);
         let layout = PASS.groups[0].layout(gpu, PASS.name);
@@ -252,7 +256,11 @@ impl GBuffer {
             (&module, &layout),
             FORMAT,
             Vertex::layout(&attributes),
-            ("vs", "fs"),
+            if plain {
+                ("vs_sided", "fs_plain")
+            } else {
+                ("vs", "fs")
+            },
         );
         let stride = uniform_stride::<Camera>(gpu);
         let uniform = gpu.buffer(

@@ -66,7 +66,8 @@ fn always(_: &Renderer) -> bool {
 graph! {
     build gbuffer: GBuffer = |b| {
         let c = b.c;
-        let g = GBuffer::new(b.gpu, (c.width, c.height, c.aa), &b.textures, &b.shared.tris);
+        let plain = !b.frame.has_cutouts();
+        let g = GBuffer::new(b.gpu, (c.width, c.height, c.aa), &b.textures, &b.shared.tris, plain);
         b.write_view("gbuffer", &g.view)?;
         Ok(g)
     };
