@@ -14,12 +14,23 @@ What it does:
     frames) then `irad metrics` of frames 8..11 (linked into OUT/[TAG_]vplsN_rR_measured)
     against OUT/reference; irad's relMSE is the mean over the four frames (metrics.json
     `mean_rel_mse`) and the seeds.
- 3. Mitsuba's seconds and relMSE per sample count come from mitsuba_cornell.py's CSV
-    (--mitsuba-csv; made by running that benchmark if the file is missing).
- 4. For each VPL count: Mitsuba's seconds at irad's relMSE, interpolated linearly in
-    log(seconds) against log(relMSE) between the two sample counts that bracket it
-    (extrapolated from the nearest two, and marked with *, outside their range), and the
-    speed ratio = Mitsuba's seconds / irad's seconds (above 1: irad is faster).
+ 3. Mitsuba is timed in the same run, paired with irad's: before irad's runs of repeat R,
+    one render of `mitsuba.cornell_box()` at each of PAIRED_SPP samples per pixel (16 to
+    512, about 15 s), each with its relMSE against Mitsuba's own cached 2048-spp image (see
+    mitsuba_cornell.py, whose functions this uses). So both programs meet the machine in
+    the same state: on these shared cores irad's median frame at 256 VPLs was 86-89 ms in
+    three runs of one session and 101-118 ms in two of the next (the same binary), Mitsuba's
+    64-spp render 0.81-1.03 s in both, and a speed from timings taken hours apart moved
+    with the hour. With --unpaired, Mitsuba's seconds and relMSE come from
+    mitsuba_cornell.py's CSV instead (--mitsuba-csv; made by running that benchmark if the
+    file is missing).
+ 4. For each mode and VPL count: Mitsuba's seconds at irad's relMSE (the mean over the
+    seeds), interpolated linearly in log(seconds) against log(relMSE) between the two
+    sample counts that bracket it (extrapolated from the nearest two, and marked with *,
+    outside their range), and the speed ratio = Mitsuba's seconds / irad's seconds (above
+    1: irad is faster). Paired, one ratio per repeat (Mitsuba's seconds of that repeat over
+    irad's marginal seconds of that repeat): the speed is their median, printed with their
+    min and max.
 
 irad's time is the marginal seconds per frame: the mean of run.json's per-frame `seconds`
 over the frames after the first (9, 10, 11; with history frames before them, all four). A frame's `seconds` runs from the scene at the
@@ -30,7 +41,7 @@ each pipeline in lavapipe, buffer allocation) that an animation does not pay aga
 Mitsuba's timed renders leave out its scene loading and the warm-up render that compiles
 its kernels. The first frame's seconds are printed beside it, so both can be seen. Each
 configuration runs --repeat times (default 3, since other work may share the cores):
-min / median / max of the marginal seconds are printed, and the median is the one compared.
+min / median / max of the marginal seconds are printed.
 
 Is the comparison fair? Mitsuba renders the still `mitsuba.cornell_box()` (camera at
 frame 0 of the orbit), irad frames 8-11 of `cornell-orbit`: the same box, materials, light,
@@ -63,7 +74,7 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 benches/speed_vs_mitsuba.py [--irad target/release/irad] [--vpls 256,1024,4096]
         [--repeat 3] [--out out/bench/speed] [--mitsuba-csv out/bench/mitsuba/mitsuba_cornell.csv]
-        [--ref DIR] [--reuse] [--mitsuba-now] [--mode TAG:HISTORY:ARGS ...]
+        [--ref DIR] [--reuse] [--unpaired [--mitsuba-now]] [--mode TAG:HISTORY:ARGS ...]
 
 Writes OUT/speed_vs_mitsuba.csv with the printed table's figures.
 """
@@ -84,6 +95,36 @@ import mitsuba_cornell  # noqa: E402
 
 SCENE = "cornell-orbit"
 DEFAULT_CSV = "out/bench/mitsuba/mitsuba_cornell.csv"
+# Mitsuba's sample counts timed in each repeat of a paired run (relMSE about 0.017 to
+# 0.0007 at 256x256: they bracket irad's at 256 to 4096 VPLs, alone or accumulated).
+PAIRED_SPP = [16, 32, 64, 128, 256, 512]
+
+
+class PairedMitsuba:
+    """Mitsuba in this process, for timings paired with irad's: the scene, warmed up, and its
+    2048-spp reference (cached in `out`, as mitsuba_cornell.py caches it)."""
+
+    def __init__(self, size, out):
+        self.mi = mitsuba_cornell.load_mitsuba()
+        self.scene = mitsuba_cornell.cornell_scene(self.mi, size)
+        t, _ = mitsuba_cornell.render(self.mi, self.scene, min(PAIRED_SPP), 7)
+        print(f"Mitsuba {self.mi.__version__} ({self.mi.variant()}), paired with irad's runs; "
+              f"warm-up render {t:.2f} s", flush=True)
+        os.makedirs(out, exist_ok=True)
+        self.ref = mitsuba_cornell.reference(self.mi, self.scene, size, 2048, out)
+
+    def measure(self, rep):
+        """One render at each of PAIRED_SPP (seeds 1000 spp + rep, as mitsuba_cornell.py's
+        repeats): rows of spp, seconds and relMSE."""
+        rows = []
+        for spp in PAIRED_SPP:
+            secs, img = mitsuba_cornell.render(self.mi, self.scene, spp, 1000 * spp + rep)
+            rows.append({"spp": spp, "seconds": secs,
+                         "rel_mse": mitsuba_cornell.rel_mse(img, self.ref)})
+        print(f"Mitsuba run {rep}: " + ", ".join(f"{int(r['spp'])} spp {r['seconds']:.2f} s"
+                                                for r in rows) + f", load {os.getloadavg()[0]:.1f}",
+              flush=True)
+        return rows
 
 
 def die(msg):
@@ -251,9 +292,12 @@ def main(argv=None):
                    help="keep finished renders found in OUT (their timings) instead of rendering again")
     p.add_argument("--mitsuba-csv", default=DEFAULT_CSV,
                    help="mitsuba_cornell.py's CSV; made with its defaults if missing")
+    p.add_argument("--unpaired", action="store_true",
+                   help="take Mitsuba's seconds from --mitsuba-csv instead of timing it in this run "
+                        "beside irad's")
     p.add_argument("--mitsuba-now", action="store_true",
-                   help="measure Mitsuba again right before irad's runs (into the CSV's folder), "
-                        "so that both meet the machine in the same state (about a minute)")
+                   help="with --unpaired: measure Mitsuba again right before irad's runs (into the "
+                        "CSV's folder, about a minute)")
     a = p.parse_args(argv)
     if a.repeat < 1 or a.size < 1 or a.ref_spp < 1:
         die("--repeat, --size and --ref-spp must be positive")
@@ -271,26 +315,34 @@ def main(argv=None):
         die(f"--irad {a.irad}: no such executable (build it with `cargo build --release`)")
     os.makedirs(a.out, exist_ok=True)
 
-    if os.path.exists(a.mitsuba_csv) and not a.mitsuba_now:
+    if a.mitsuba_now and not a.unpaired:
+        die("--mitsuba-now goes with --unpaired (a paired run times Mitsuba beside irad anyway)")
+    paired, mrows, prows = None, None, []
+    if not a.unpaired:
+        paired = PairedMitsuba(a.size, os.path.dirname(a.mitsuba_csv) or ".")
+    elif os.path.exists(a.mitsuba_csv) and not a.mitsuba_now:
         print(f"Mitsuba: {a.mitsuba_csv}")
     else:
         why = "measured now (--mitsuba-now)" if a.mitsuba_now else "is missing"
         print(f"Mitsuba: {a.mitsuba_csv} {why}: running mitsuba_cornell.py", flush=True)
         mitsuba_cornell.run(mitsuba_cornell.DEFAULT_SPP, size=a.size,
                             out=os.path.dirname(a.mitsuba_csv) or ".")
-    mrows = mitsuba_cornell.read_csv(a.mitsuba_csv)
-    sizes = {int(r["size"]) for r in mrows if "size" in r}
-    if sizes and sizes != {a.size}:
-        die(f"{a.mitsuba_csv} was measured at {sorted(sizes)} pixels a side, not --size {a.size}: "
-            f"run mitsuba_cornell.py --size {a.size} --out DIR and pass --mitsuba-csv DIR/mitsuba_cornell.csv")
-    for r in mrows:
-        print(f"  {int(r['spp']):5} spp  {r['seconds']:7.3f} s  relMSE {r['rel_mse']:.5f}")
+    if a.unpaired:
+        mrows = mitsuba_cornell.read_csv(a.mitsuba_csv)
+        sizes = {int(r["size"]) for r in mrows if "size" in r}
+        if sizes and sizes != {a.size}:
+            die(f"{a.mitsuba_csv} was measured at {sorted(sizes)} pixels a side, not --size {a.size}: "
+                f"run mitsuba_cornell.py --size {a.size} --out DIR and pass --mitsuba-csv DIR/mitsuba_cornell.csv")
+        for r in mrows:
+            print(f"  {int(r['spp']):5} spp  {r['seconds']:7.3f} s  relMSE {r['rel_mse']:.5f}")
 
     print(f"load average (1 min) before the runs: {os.getloadavg()[0]:.2f}")
     renders = {}
     # Run r of every mode and VPL count before run r + 1 of any: a drift in the machine's
     # speed (other work on the cores) then weighs on every row alike.
     for rep in range(a.repeat):
+        if paired:
+            prows.append(paired.measure(rep))
         for mode in modes:
             for n in vpls:
                 d, m, first, wall = irad_render(irad, a.out, a.size, frames, n, rep, a.reuse, mode)
@@ -309,7 +361,15 @@ def main(argv=None):
                         "s_median": statistics.median(marg), "s_max": marg[-1],
                         "first_s": statistics.median(r[2] for r in runs),
                         "rel_mse": statistics.mean(errs), "rel_mse_min": min(errs),
-                        "rel_mse_max": max(errs)})
+                        "rel_mse_max": max(errs), "seconds_by_run": [r[1] for r in runs]})
+    if paired:
+        path = os.path.join(a.out, "mitsuba_paired.csv")
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(["run", "spp", "seconds", "rel_mse"])
+            for rep, rows in enumerate(prows):
+                for r in rows:
+                    w.writerow([rep, r["spp"], f"{r['seconds']:.6g}", f"{r['rel_mse']:.6g}"])
 
     print()
     print(f"{SCENE} frames {frames[0]}..{frames[1]} at {a.size}x{a.size}, irad reference {a.ref_spp} spp; "
@@ -320,22 +380,40 @@ def main(argv=None):
               f"`{' '.join(extra) or '(defaults)'}`")
     head = (f"{'mode':>6}  {'VPLs':>5}  {'irad ms/frame (min/med/max)':>27}  "
             f"{'relMSE (min-max)':>26}  "
-            f"{'Mitsuba s':>9}  {'(spp)':>9}  {'speed':>6}  {'speed (mins)':>12}")
+            f"{'Mitsuba s':>9}  {'(spp)':>9}  {'speed':>6}  "
+            + (f"{'speed min-max':>15}" if paired else f"{'speed (mins)':>12}"))
     print(head)
     print("-" * len(head))
     for r in results:
-        ms, extra, (lo, hi) = mitsuba_seconds_at(mrows, r["rel_mse"])
-        ms_min, _, _ = mitsuba_seconds_at(mrows, r["rel_mse"], "seconds_min")
-        r.update(mitsuba_s=ms, mitsuba_s_min=ms_min, extrapolated=extra,
-                 ratio=ms / r["s_median"], ratio_min=ms_min / r["s_min"])
+        if paired:
+            # Each repeat's ratio: Mitsuba's seconds then over irad's marginal seconds then.
+            at = [mitsuba_seconds_at(rows, r["rel_mse"]) for rows in prows]
+            ratios = sorted(m[0] / s for m, s in zip(at, r["seconds_by_run"]))
+            ms, extra, (lo, hi) = statistics.median(m[0] for m in at), at[0][1], at[0][2]
+            r.update(mitsuba_s=ms, extrapolated=extra, ratio=statistics.median(ratios),
+                     ratio_min=ratios[0], ratio_max=ratios[-1])
+            tail = f"{r['ratio_min']:>6.2f}-{r['ratio_max']:.2f}x"
+        else:
+            ms, extra, (lo, hi) = mitsuba_seconds_at(mrows, r["rel_mse"])
+            ms_min, _, _ = mitsuba_seconds_at(mrows, r["rel_mse"], "seconds_min")
+            r.update(mitsuba_s=ms, mitsuba_s_min=ms_min, extrapolated=extra,
+                     ratio=ms / r["s_median"], ratio_min=ms_min / r["s_min"])
+            tail = f"{r['ratio_min']:>11.2f}x"
+        del r["seconds_by_run"]
         band = f"{lo}-{hi}" + ("*" if extra else "")
         spread = f"({r['rel_mse_min']:.5f}-{r['rel_mse_max']:.5f})"
         print(f"{r['mode']:>6}  {r['vpls']:>5}  {r['s_min'] * 1e3:>7.0f} / {r['s_median'] * 1e3:>6.0f} / "
               f"{r['s_max'] * 1e3:>6.0f}    {r['rel_mse']:>8.5f} {spread:>17}  {ms:>9.3f}  {band:>9}  "
-              f"{r['ratio']:>5.2f}x  {r['ratio_min']:>11.2f}x")
-    print("speed = Mitsuba's median seconds at the same relMSE / irad's median marginal seconds per\n"
-          "frame; speed (mins) = the same with the fastest run of each (less disturbed by other work\n"
-          "on the cores); * = outside Mitsuba's measured range: extrapolated")
+              f"{r['ratio']:>5.2f}x  {tail}")
+    if paired:
+        print("speed = the median over the repeats of Mitsuba's seconds at irad's mean relMSE,\n"
+              "timed in that repeat just before irad's runs, over irad's marginal seconds per frame\n"
+              "in that repeat (min-max: the lowest and highest repeat); Mitsuba s: the median of\n"
+              "its repeats; * = outside Mitsuba's measured range: extrapolated")
+    else:
+        print("speed = Mitsuba's median seconds at the same relMSE / irad's median marginal seconds per\n"
+              "frame; speed (mins) = the same with the fastest run of each (less disturbed by other work\n"
+              "on the cores); * = outside Mitsuba's measured range: extrapolated")
     path = os.path.join(a.out, "speed_vs_mitsuba.csv")
     with open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(results[0].keys()))
