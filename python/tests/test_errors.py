@@ -68,6 +68,7 @@ def test_ctrl_c_stops_a_reference_between_frames():
     start = time.time()
     timer.start()
     with pytest.raises(KeyboardInterrupt):
-        # About 0.03 s a frame here: 2000 frames would take a minute.
-        irad.reference("cornell-orbit", frames=range(0, 2000), spp=1, size=(32, 32))
+        # About 5 ms a frame here: 2000 frames would take 10 s. (At 1 spp a frame took 0.5 ms
+        # and all 2000 about 1 s, and once in CI the call ended without the interrupt.)
+        irad.reference("cornell-orbit", frames=range(0, 2000), spp=16, size=(32, 32))
     assert time.time() - start < 10
