@@ -200,6 +200,20 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
         ),
         20,
     );
+    // A pool past the budget of full sums (6000 candidates x up to 64 camera points): each
+    // candidate's importance summed over every third stratum only (`mh::pool_stride`), so b is
+    // an unbiased estimate from fewer rays and must still give the uniform estimate.
+    let sampled_pool = stats(
+        &run_with(
+            SamplerParams {
+                candidates: 6000,
+                ..params(SamplerKind::Mh, 16)
+            },
+            140,
+            20,
+        ),
+        20,
+    );
     // Particles that live ten frames on average, and that follow a target.
     let smc = stats(
         &run_with(
@@ -235,6 +249,7 @@ fn cdf_and_mh_average_to_the_uniform_estimate() {
             ("mh", &mh),
             ("mh escape 8", &escape),
             ("mh rate 0.1", &lazy),
+            ("mh sampled pool", &sampled_pool),
             ("smc rate 0.1", &smc),
             ("rmsmc rate 0.1", &rmsmc),
         ] {

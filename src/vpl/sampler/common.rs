@@ -4,7 +4,7 @@
 use super::Selection;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::{importance_all, CameraPoint};
+use crate::vpl::importance::{importance_all_sampled, CameraPoint};
 use crate::vpl::{trace_path, ShadedVpl, Vpl};
 use rand::Rng;
 use std::collections::{HashMap, HashSet};
@@ -157,7 +157,20 @@ impl Candidates {
         eps: f32,
         clamp: f32,
     ) -> Self {
-        let raw = importance_all(&vpls, points, tracer, clamp);
+        Self::sampled(vpls, (paths, paths_s), tracer, (points, 1), eps, clamp)
+    }
+
+    /// [`Candidates::of`] with each importance estimated from every `stride`-th camera point
+    /// ([`crate::vpl::importance::importance_sampled`]).
+    pub fn sampled(
+        vpls: Vec<Vpl>,
+        (paths, paths_s): (u64, f64),
+        tracer: &Tracer,
+        (points, stride): (&[CameraPoint], usize),
+        eps: f32,
+        clamp: f32,
+    ) -> Self {
+        let raw = importance_all_sampled(&vpls, points, tracer, clamp, stride);
         let mean = raw.iter().map(|&x| x as f64).sum::<f64>() / raw.len().max(1) as f64;
         let floor = (eps as f64 * mean) as f32;
         Candidates {
