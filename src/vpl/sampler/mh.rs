@@ -17,8 +17,8 @@
 //!   `importance_sampled`): an unbiased estimate of its I, so b stays unbiased, for a fixed
 //!   number of shadow rays a frame. At 4096 VPLs (a pool of 16384) the full sums took 178
 //!   ms of a 364 ms frame on 2 cores, to estimate one scalar. Chains and proposals keep the
-//!   full sum; the chains of the first frame, drawn from the pool, start from the sampled
-//!   target and move to the full one as they step.
+//!   full sum, and so does the pool of the chains' first frame, which they are drawn from
+//!   (its sampled sums are kept for the next frame's change).
 //! - Proposals come from the frame's fresh candidates (an independence proposal from p, as
 //!   before), so over time the chains still explore every path; only the proposed candidates'
 //!   importance is evaluated.
@@ -34,7 +34,7 @@ use super::{SamplerKind, SamplerParams, Selection, VplSampler};
 use crate::math::rng;
 use crate::scene::Frame;
 use crate::trace::Tracer;
-use crate::vpl::importance::{importance, CameraPoint};
+use crate::vpl::importance::{importance, importance_all_sampled, CameraPoint};
 use crate::vpl::sampler::common::{fresh_paths, paths_by, PATHS_PER_FRAME};
 use crate::vpl::{trace_path, Vpl};
 use rand::Rng;
@@ -256,12 +256,15 @@ impl VplSampler for Mh {
             false,
         );
         let paths_s = t_pool.elapsed().as_secs_f64();
+        // The chains' first frame (or a restart) draws them from the pool: with the full sums,
+        // so that they start on their target.
+        let first = self.chains.len() != p.slots;
         let stride = pool_stride(p.candidates, points.len());
         let pool = Candidates::sampled(
             vpls,
             (paths, paths_s),
             tracer,
-            (&points, stride),
+            (&points, if first { 1 } else { stride }),
             p.knobs.eps(SamplerKind::Mh),
             p.clamp,
         );
@@ -276,15 +279,24 @@ impl VplSampler for Mh {
             };
         }
         let rate = (p.knobs.mh_rate + p.knobs.mh_follow * self.change(&pool)).min(1.0);
+        // The next frame's change compares sums of the same kind: sampled ones, also after a
+        // first frame of full sums (a stride's worth of them more, once).
+        let sampled;
+        let raw = if first && stride > 1 {
+            sampled = importance_all_sampled(&pool.vpls, &points, tracer, p.clamp, stride);
+            &sampled
+        } else {
+            &pool.raw
+        };
         self.last_pool = pool
             .vpls
             .iter()
-            .zip(&pool.raw)
+            .zip(raw)
             .map(|(v, &i)| (key(v), i))
             .collect();
         let n = p.slots;
         let mut r = rng(&[p.seed, f, 0x5a3b]);
-        let (chosen, imp, acceptance, fresh_paths_n) = if self.chains.len() != n {
+        let (chosen, imp, acceptance, fresh_paths_n) = if first {
             // Chains start from a CDF draw over the pool.
             let idx = cdf_draw(&pool.importance, n, &mut r);
             let chosen: Vec<Vpl> = idx.iter().map(|&i| pool.vpls[i]).collect();
