@@ -77,9 +77,9 @@ pub fn importance(v: &Vpl, points: &[CameraPoint], tracer: &Tracer, clamp: f32) 
 /// over the offsets is `I(v)` exactly. `stride` 1 is `I(v)`. By stratum, not by place in the
 /// list: as the camera moves, strata that start or stop seeing geometry would otherwise shift
 /// every later point into another subset, and a kept VPL's sampled importance would jump
-/// (on `cornell-orbit` the pool's change then drove `mh`'s rate to 1 in most frames). With an
-/// odd stride the strata taken from the row-major grid run diagonally across it rather than
-/// down a few columns.
+/// (on `cornell-orbit` the pool's change then drove `mh`'s rate to 1 in most frames). An odd
+/// stride on a grid of even width (16 strata a row at 256 points on a square image) takes
+/// strata that run diagonally across the grid rather than down a few columns.
 pub fn importance_sampled(
     v: &Vpl,
     points: &[CameraPoint],

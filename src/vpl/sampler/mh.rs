@@ -12,8 +12,8 @@
 //!   `sqrt(2 mh_rate)` of that, and over time every pool path is replaced, so its error
 //!   averages out (a pool that never renewed would keep one draw's error for good). A pool
 //!   of more than [`POOL_PAIRS`] / K candidates (K camera points; 1024 at the default 256)
-//!   sums each candidate's importance over every s-th camera point only, s odd and about
-//!   M K / POOL_PAIRS, times s, from an offset of the candidate's own ([`pool_stride`],
+//!   sums each candidate's importance over the camera points of every s-th stratum only, s
+//!   odd and about M K / POOL_PAIRS, times s, from an offset of the candidate's own ([`pool_stride`],
 //!   `importance_sampled`): an unbiased estimate of its I, so b stays unbiased, for a fixed
 //!   number of shadow rays a frame. At 4096 VPLs (a pool of 16384) the full sums took 178
 //!   ms of a 364 ms frame on 2 cores, to estimate one scalar. Chains and proposals keep the
