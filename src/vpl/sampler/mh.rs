@@ -13,9 +13,9 @@
 //!   averages out (a pool that never renewed would keep one draw's error for good). A pool
 //!   of more than [`POOL_PAIRS`] / K candidates (K camera points; 1024 at the default 256)
 //!   sums each candidate's importance over the camera points of every s-th stratum only, s
-//!   odd and about M K / POOL_PAIRS, times s, from an offset of the candidate's own ([`pool_stride`],
-//!   `importance_sampled`): an unbiased estimate of its I, so b stays unbiased, for a fixed
-//!   number of shadow rays a frame. At 4096 VPLs (a pool of 16384) the full sums took 178
+//!   odd and about M K / POOL_PAIRS, times s, from an offset of the candidate's own
+//!   ([`pool_stride`], `importance_sampled`): an unbiased estimate of its I, so b stays
+//!   unbiased, for a fixed number of shadow rays a frame. At 4096 VPLs (a pool of 16384) the full sums took 178
 //!   ms of a 364 ms frame on 2 cores, to estimate one scalar. Chains and proposals keep the
 //!   full sum, and so does the pool of the chains' first frame, which they are drawn from
 //!   (its sampled sums are kept for the next frame's change).
