@@ -160,8 +160,8 @@ impl Candidates {
         Self::sampled(vpls, (paths, paths_s), tracer, (points, 1), eps, clamp)
     }
 
-    /// [`Candidates::of`] with each importance estimated from every `stride`-th camera point
-    /// ([`crate::vpl::importance::importance_sampled`]).
+    /// [`Candidates::of`] with each importance estimated from the camera points of every
+    /// `stride`-th stratum ([`crate::vpl::importance::importance_sampled`]).
     pub fn sampled(
         vpls: Vec<Vpl>,
         (paths, paths_s): (u64, f64),
