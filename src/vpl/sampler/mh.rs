@@ -15,10 +15,10 @@
 //!   sums each candidate's importance over the camera points of every s-th stratum only, s
 //!   odd and about M K / POOL_PAIRS, times s, from an offset of the candidate's own
 //!   ([`pool_stride`], `importance_sampled`): an unbiased estimate of its I, so b stays
-//!   unbiased, for a fixed number of shadow rays a frame. At 4096 VPLs (a pool of 16384) the full sums took 178
-//!   ms of a 364 ms frame on 2 cores, to estimate one scalar. Chains and proposals keep the
-//!   full sum, and so does the pool of the chains' first frame, which they are drawn from
-//!   (its sampled sums are kept for the next frame's change).
+//!   unbiased, for a fixed number of shadow rays a frame. At 4096 VPLs (a pool of 16384)
+//!   the full sums took 178 ms of a 364 ms frame on 2 cores, to estimate one scalar. Chains
+//!   and proposals keep the full sum, and so does the pool of the chains' first frame,
+//!   which they are drawn from (its sampled sums are kept for the next frame's change).
 //! - Proposals come from the frame's fresh candidates (an independence proposal from p, as
 //!   before), so over time the chains still explore every path; only the proposed candidates'
 //!   importance is evaluated.
