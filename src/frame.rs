@@ -202,11 +202,13 @@ impl Pipeline {
         );
         lap(&mut stages, "emitter_edges", &mut t);
         // 8. GPU: G-buffer, shadow maps, direct, ISMs, gather, compose, read back (with the
-        // direct and indirect parts too where emitter edges need the emission they leave).
+        // direct and indirect parts too where emitter edges need the emission they leave, and
+        // a classical method's surface edges the light they replace).
         // With the clamping-bias compensation (instant radiosity only), the direct pass clamps
         // points on emitter triangles as the gather clamps VPLs, and the compensation adds
         // back what both leave out.
-        let parts = components || !edges.is_empty();
+        let parts =
+            components || !edges.is_empty() || (self.classical.is_some() && c.edge_rays > 0);
         let compensate = c.compensate > 0 && self.classical.is_none();
         let image = self.renderer.render(
             &GpuFrame {
@@ -249,46 +251,63 @@ impl Pipeline {
             image.ldr = image.hdr.to_srgb8(c.exposure);
         }
         // A classical method's silhouettes and creases, box-filtered by camera rays through
-        // its solution (CPU), in place of the sub-samples' steps.
-        if let Some(edge) = self.classical.as_ref().and_then(|c| c.edges.as_ref()) {
+        // its solution (CPU), in place of the sub-samples' steps: each ray sees the solution's
+        // indirect light and the direct light of the frame's emitter samples, traced (what the
+        // GPU's passes show inside surfaces, with exact visibility for the shadow maps').
+        if let (Some(edge), Some(_), Some(_)) = (
+            self.classical.as_ref().and_then(|c| c.edges.as_ref()),
+            &image.direct,
+            &image.indirect,
+        ) {
             let cam = frame.camera;
+            let (w, h) = (c.width, c.height);
+            let els = &edge.reflected.elements;
+            let hit = |p: glam::Vec2| {
+                let d = cam.ray_dir(p, w, h);
+                let hit = edge
+                    .reflected
+                    .tracer
+                    .intersect(cam.position, d, f32::INFINITY)?;
+                Some((d, hit.tri as usize, hit.b1, hit.b2))
+            };
+            let environment = frame.emitters.environment.as_deref();
             let edges = crate::trace::edges::surface_edges(
-                (c.width, c.height),
-                c.aa,
+                (w, h),
+                c.aa.min(2),
                 c.edge_rays,
                 frame.camera.position.length().max(1.0),
-                |p| {
-                    let d = cam.ray_dir(p, c.width, c.height);
-                    let hit = edge
-                        .reflected
-                        .tracer
-                        .intersect(cam.position, d, f32::INFINITY);
-                    match hit {
-                        Some(hit) => {
-                            let (e, b1, b2) = (hit.tri as usize, hit.b1, hit.b2);
-                            let els = &edge.reflected.elements;
-                            let n = els.normals[e];
-                            let b = [1.0 - b1 - b2, b1, b2];
-                            let indirect = radiosity::form_factor::at(&edge.indirect[e], b);
-                            crate::trace::edges::Seen {
-                                radiance: [edge.reflected.at(e, b1, b2), indirect],
-                                plane: Some((n, n.dot(els.tris[e][0]))),
-                            }
+                |p| match hit(p) {
+                    Some((_, e, b1, b2)) => {
+                        let n = els.normals[e];
+                        crate::trace::edges::Seen {
+                            radiance: edge.reflected.at(e, b1, b2),
+                            plane: Some((n, n.dot(els.tris[e][0]))),
                         }
-                        None => crate::trace::edges::Seen {
-                            radiance: [glam::Vec3::ZERO; 2],
-                            plane: None,
-                        },
                     }
+                    None => crate::trace::edges::Seen {
+                        radiance: glam::Vec3::ZERO,
+                        plane: None,
+                    },
+                },
+                |points| {
+                    shade_edge(
+                        points,
+                        &hit,
+                        edge,
+                        &self.tracer,
+                        &lights,
+                        environment,
+                        cam,
+                        (w, h),
+                    )
                 },
             );
-            for &(i, [d, di]) in &edges {
-                image.hdr.data[i] = (image.hdr.data[i] + d).max(glam::Vec3::ZERO);
-                if let Some(ind) = &mut image.indirect {
-                    ind.data[i] = (ind.data[i] + di).max(glam::Vec3::ZERO);
-                }
-                if let Some(dir) = &mut image.direct {
-                    dir.data[i] = (dir.data[i] + d - di).max(glam::Vec3::ZERO);
+            if let (Some(dir), Some(ind)) = (&mut image.direct, &mut image.indirect) {
+                for &(i, [l, li]) in &edges {
+                    let o = &mut image.hdr.data[i];
+                    *o = (*o - dir.data[i] - ind.data[i] + l).max(glam::Vec3::ZERO);
+                    dir.data[i] = (l - li).max(glam::Vec3::ZERO);
+                    ind.data[i] = li;
                 }
             }
             if !edges.is_empty() {
@@ -354,6 +373,111 @@ struct Classical {
 struct EdgeShading {
     reflected: radiosity::display::Shaded,
     indirect: Vec<[glam::Vec3; 3]>,
+}
+
+/// The mean over `points` (image points of one pixel, `rays x rays` n-rooks points) of the
+/// light a classical method's frame shows there besides emission, and its indirect part: the
+/// solution's indirect light (Gouraud) plus the direct light of the emitter samples `lights`,
+/// traced; the environment where a ray meets nothing. `hit` casts a camera ray onto the
+/// elements. Each emitter sample's visibility is traced at 16 of the points spread over the
+/// pixel (every `rays / 4`-th row and column of the lattice) and, where those disagree or
+/// a point lies on a surface none of them met, at every point: a shadow's edge crossing the
+/// pixel is traced in full, its inside or outside costs 16 rays.
+#[allow(clippy::too_many_arguments)]
+fn shade_edge(
+    points: &[glam::Vec2],
+    hit: &(dyn Fn(glam::Vec2) -> Option<(glam::Vec3, usize, f32, f32)> + Sync),
+    edge: &EdgeShading,
+    tracer: &Tracer,
+    lights: &[crate::scene::EmitterSample],
+    environment: Option<&crate::scene::Environment>,
+    cam: crate::scene::camera::Camera,
+    (w, h): (u32, u32),
+) -> [glam::Vec3; 2] {
+    use glam::Vec3;
+    let els = &edge.reflected.elements;
+    let rays = (points.len() as f64).sqrt().round().max(1.0) as usize;
+    let stride = (rays / 4).max(1);
+    let probe = |k: usize| (k % rays).is_multiple_of(stride) && (k / rays).is_multiple_of(stride);
+    struct At {
+        x: Vec3,
+        n: Vec3,
+        albedo: Vec3,
+        plane: (Vec3, f32),
+    }
+    let mut sum = [Vec3::ZERO; 2];
+    let mut at = Vec::with_capacity(points.len());
+    for &p in points {
+        let Some((d, e, b1, b2)) = hit(p) else {
+            // The environment toward the pixel's centre, as the direct pass gives it.
+            if let Some(env) = environment {
+                let centre = p.floor() + glam::Vec2::splat(0.5);
+                sum[0] += env.radiance(cam.ray_dir(centre, w, h));
+            }
+            at.push(None);
+            continue;
+        };
+        let n = els.normals[e];
+        let n = if n.dot(d) > 0.0 { -n } else { n };
+        let indirect = radiosity::form_factor::at(&edge.indirect[e], [1.0 - b1 - b2, b1, b2]);
+        sum[0] += indirect;
+        sum[1] += indirect;
+        let x = els.point(e, b1, b2);
+        at.push(Some(At {
+            x,
+            n,
+            albedo: els.albedo(e),
+            plane: (n, n.dot(x)),
+        }));
+    }
+    let probed: Vec<(Vec3, f32)> = (0..at.len())
+        .filter(|&k| probe(k))
+        .filter_map(|k| at[k].as_ref().map(|a| a.plane))
+        .collect();
+    let scale = cam.position.length().max(1.0);
+    let on_probed: Vec<bool> = at
+        .iter()
+        .map(|a| {
+            a.as_ref().is_some_and(|a| {
+                probed
+                    .iter()
+                    .any(|&(n, o)| n.dot(a.n) > 0.9999 && (o - a.plane.1).abs() <= 1e-5 * scale)
+            })
+        })
+        .collect();
+    let mut direct = Vec3::ZERO;
+    for l in lights {
+        // The probes' visibility of this sample: Some(v) if all that it lights agree.
+        let mut shared: Option<Option<bool>> = None;
+        for (k, a) in at.iter().enumerate() {
+            let Some(a) = a else { continue };
+            if !probe(k) {
+                continue;
+            }
+            if let Some((_, y, ny)) = l.irradiance_at(a.x, a.n) {
+                let v = !tracer.occluded(a.x, a.n, y, ny);
+                shared = match shared {
+                    None => Some(Some(v)),
+                    Some(Some(s)) if s == v => Some(Some(v)),
+                    _ => Some(None),
+                };
+            }
+        }
+        for (a, &on_probed) in at.iter().zip(&on_probed) {
+            let Some(a) = a else { continue };
+            if let Some((e, y, ny)) = l.irradiance_at(a.x, a.n) {
+                let visible = match shared {
+                    Some(Some(v)) if on_probed => v,
+                    _ => !tracer.occluded(a.x, a.n, y, ny),
+                };
+                if visible {
+                    direct += a.albedo * e;
+                }
+            }
+        }
+    }
+    sum[0] += direct / std::f32::consts::PI;
+    sum.map(|v| v / points.len().max(1) as f32)
 }
 
 impl Classical {

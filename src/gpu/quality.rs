@@ -43,7 +43,9 @@ pub struct Quality {
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true))]
     pub interleave: u32,
     /// Anti-aliasing: S x S sub-samples per pixel, box-filtered into the pixel (the
-    /// reference's pixel filter); the passes run at S times the size (1: pixel centres only)
+    /// reference's pixel filter); the passes run at S times the size (1: pixel centres only;
+    /// 0: from the method, 2 for instant radiosity and 4 for the classical methods, see
+    /// `resolve::aa`)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().aa, allow_hyphen_values = true))]
     pub aa: u32,
     /// Edges box-filtered on the CPU: in pixels at an emitter's edge its emission is the
@@ -84,18 +86,22 @@ impl Default for Quality {
             shadow_size: 256,
             // From the VPL count (`interleave_for`): 4, or 8 from 4096 VPLs.
             interleave: 0,
-            // 2x2 sub-samples: measured on the Cornell box at 128x128 (docs/antialiasing.md),
-            // the mean luminance goes from +6.9% of the reference's to +0.9% for +20% of the
-            // frame's time; 3x3 and 4x4 cost 2.2x and 3.1x.
-            aa: 2,
-            // 8: an emitter triangle's share of an edge pixel is its projection's exact area
+            // From the method (`resolve::aa`): 2x2 sub-samples for instant radiosity, measured
+            // on the Cornell box at 128x128 (docs/antialiasing.md): the mean luminance goes
+            // from +6.9% of the reference's to +0.9% for +20% of the frame's time (3x3 and 4x4
+            // cost 2.2x and 3.1x); 4x4 for a classical method's still solution.
+            aa: 0,
+            // 16: an emitter triangle's share of an edge pixel is its projection's exact area
             // in the pixel (`trace::edges`), the rays deciding only what hides it and what it
-            // emits there; a classical method's silhouettes and creases are box-filtered by
-            // the same rays through its solution. On `cornell-orbit` at 96x96 against a
-            // 2048-spp reference (warped F1 floor 0.00101), this takes cdf's warped flicker
-            // from 0.00356 to 0.00209 and progressive's from 0.00279 to 0.00110, their relMSE
-            // from 0.0056 and 0.0020 to 0.0048 and 0.0009 (docs/antialiasing.md).
-            edge_rays: 8,
+            // emits there; a classical method's silhouettes and creases take their light
+            // box-filtered by the same rays, each seeing what the surfaces show. On
+            // `cornell-orbit` at 96x96 against a 2048-spp reference (warped F1 floor 0.00101),
+            // 8 took cdf's warped flicker from 0.00356 to 0.00209 and progressive's from
+            // 0.00279 to 0.00110 (docs/antialiasing.md); against an 8192-spp reference, 16
+            // (with 4x4 sub-samples) takes progressive's own flicker from 0.000207 to 0.000173
+            // at 1.5x its frame's time; instant radiosity's emitter edges cost 1.9 ms at 256x256
+            // (0.7 ms at 8).
+            edge_rays: 16,
             // Off: 16 paths a pixel take a 256x256 Cornell frame from 0.14 s to 0.35 s (docs/math.md
             // section 4); a render whose emitters light surfaces within the clamp says so.
             compensate: 0,
@@ -129,7 +135,7 @@ impl Quality {
         check::int("`light_samples`", self.light_samples, 0, 4096)?;
         check::int("`shadow_size`", self.shadow_size, 8, MAX_SIZE)?;
         check::int("`interleave`", self.interleave, 0, 8)?;
-        check::int("`aa`", self.aa, 1, 8)?;
+        check::int("`aa`", self.aa, 0, 8)?;
         check::int("`edge_rays`", self.edge_rays, 0, 32)?;
         check::int("`compensate`", self.compensate, 0, 256)?;
         check::int("`accumulate`", self.accumulate, 0, 4096)

@@ -502,20 +502,27 @@ impl Mesh {
 
     /// Gouraud values: for each element corner, the area-weighted mean of `value` over the
     /// elements around that vertex that lie in the same plane direction and came from a
-    /// triangle of the same material (so colours do not bleed around corners).
+    /// triangle of the same material (so colours do not bleed around corners). Where the mesh
+    /// is not conforming (hierarchical radiosity's leaves: an element's edge holds another
+    /// element's corner, a T-vertex), the corner at the T-vertex takes the value the longer
+    /// edge interpolates there, longest edges first, so the shading is continuous across every
+    /// edge (a step there is a line in the image that the pixel grid samples differently in
+    /// every frame of a moving camera).
     pub fn corner_values(&self, frame: &Frame, value: &[Vec3]) -> Vec<[Vec3; 3]> {
         let around = self.vertex_elements();
-        self.elems
+        let alike = |a: &Element, b: &Element| {
+            a.normal.dot(b.normal) > 0.99
+                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
+        };
+        let mut corners: Vec<[Vec3; 3]> = self
+            .elems
             .iter()
             .map(|e| {
-                let mat = frame.tri_material[e.source as usize];
                 e.v.map(|v| {
                     let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
                     for &o in &around[v as usize] {
                         let eo = &self.elems[o as usize];
-                        if eo.normal.dot(e.normal) > 0.99
-                            && frame.tri_material[eo.source as usize] == mat
-                        {
+                        if alike(e, eo) {
                             sum += value[o as usize] * eo.area;
                             w += eo.area;
                         }
@@ -527,7 +534,53 @@ impl Mesh {
                     }
                 })
             })
-            .collect()
+            .collect();
+        // T-vertices lie at midpoints of longer edges (midpoint splits), of their halves and
+        // so on: found by position, the midpoint computed as the split computed it.
+        let bits = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+        let at: HashMap<[u32; 3], u32> = self
+            .verts
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| (bits(p), i as u32))
+            .collect();
+        let mut order: Vec<u32> = (0..self.elems.len() as u32).collect();
+        order.sort_by(|&a, &b| {
+            let la = self.longest(a);
+            let lb = self.longest(b);
+            self.edge_len2(lb.0, lb.1)
+                .total_cmp(&self.edge_len2(la.0, la.1))
+        });
+        for e in order {
+            let el = &self.elems[e as usize];
+            for i in 0..3 {
+                let (a, b) = (el.v[i], el.v[(i + 1) % 3]);
+                let (ca, cb) = (corners[e as usize][i], corners[e as usize][(i + 1) % 3]);
+                // (a, b, their values), halved while a vertex sits at the midpoint.
+                let mut stack = vec![(a, b, ca, cb, 0)];
+                while let Some((a, b, ca, cb, depth)) = stack.pop() {
+                    let mid = (self.verts[a as usize] + self.verts[b as usize]) * 0.5;
+                    let Some(&m) = at.get(&bits(mid)) else {
+                        continue;
+                    };
+                    if m == a || m == b || depth > 32 {
+                        continue;
+                    }
+                    let cm = (ca + cb) * 0.5;
+                    for &o in &around[m as usize] {
+                        let eo = &self.elems[o as usize];
+                        if o != e && alike(el, eo) {
+                            if let Some(j) = eo.v.iter().position(|&v| v == m) {
+                                corners[o as usize][j] = cm;
+                            }
+                        }
+                    }
+                    stack.push((a, m, ca, cm, depth + 1));
+                    stack.push((m, b, cm, cb, depth + 1));
+                }
+            }
+        }
+        corners
     }
 
     /// The elements as a frame (same camera and materials), for ray casting onto elements:
@@ -687,6 +740,60 @@ mod tests {
             "{floor_new} of {}",
             m.len() - n0
         );
+    }
+
+    /// Gouraud values are continuous across an edge that holds a T-vertex (one element's
+    /// edge, two elements' on the other side, as hierarchical radiosity's leaves meet): both
+    /// sides interpolate the same values all along it. Without the fix the T-vertex takes
+    /// the small elements' mean alone (0 here, against 0.8 on the long edge). A conforming
+    /// mesh keeps the plain area-weighted means.
+    #[test]
+    fn gouraud_values_are_continuous_across_t_vertices() {
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let z = Vec3::Z;
+        let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        let m = Mesh::from_triangles(&[
+            ([p(0.0, 0.0), p(2.0, 0.0), p(0.0, 2.0)], 0, z),
+            ([p(0.0, 0.0), p(1.0, -1.0), p(1.0, 0.0)], 0, z),
+            ([p(1.0, 0.0), p(1.0, -1.0), p(2.0, 0.0)], 0, z),
+        ]);
+        assert_eq!(m.len(), 3);
+        let c = m.corner_values(&f, &[Vec3::ONE, Vec3::ZERO, Vec3::ZERO]);
+        // Each element's Gouraud value at point x of its plane (barycentric interpolation).
+        let at = |e: usize, x: Vec3| {
+            let [a, b, cc] = m.corners(e);
+            let area = (b - a).cross(cc - a).z;
+            let w1 = (cc - b).cross(x - b).z / area;
+            let w2 = (a - cc).cross(x - cc).z / area;
+            c[e][0] * w1 + c[e][1] * w2 + c[e][2] * (1.0 - w1 - w2)
+        };
+        for k in 0..=20 {
+            let x = p(k as f32 / 10.0, 0.0);
+            let small = if x.x <= 1.0 { 1 } else { 2 };
+            let (big, fine) = (at(0, x).x, at(small, x).x);
+            assert!((big - fine).abs() < 1e-5, "at {x}: {big} against {fine}");
+        }
+        assert!((at(0, p(1.0, 0.0)).x - 0.8).abs() < 1e-5);
+        // Conforming: the plain means.
+        let u = Mesh::uniform(&f, 0.5, 100_000);
+        let value: Vec<Vec3> = (0..u.len()).map(|e| Vec3::splat((e % 7) as f32)).collect();
+        let around = u.vertex_elements();
+        let got = u.corner_values(&f, &value);
+        for (e, el) in u.elems.iter().enumerate() {
+            for (j, &v) in el.v.iter().enumerate() {
+                let (mut sum, mut w) = (Vec3::ZERO, 0.0);
+                for &o in &around[v as usize] {
+                    let eo = &u.elems[o as usize];
+                    if eo.normal.dot(el.normal) > 0.99
+                        && f.tri_material[eo.source as usize] == f.tri_material[el.source as usize]
+                    {
+                        sum += value[o as usize] * eo.area;
+                        w += eo.area;
+                    }
+                }
+                assert!((got[e][j] - sum / w).abs().max_element() < 1e-5);
+            }
+        }
     }
 
     #[test]

@@ -149,30 +149,34 @@ pub fn emitter_edges(
         .collect()
 }
 
-/// What a view-independent solution shows through an image point: its radiance (and a part
-/// of it, filtered alike) and the plane of the surface there (unit normal and offset; None
-/// where the ray meets nothing).
+/// What a view-independent solution shows through an image point, for finding its edges:
+/// its radiance (an estimate is enough: only steps in its luminance matter) and the plane
+/// of the surface there (unit normal and offset; None where the ray meets nothing).
 #[derive(Clone, Copy, Debug)]
 pub struct Seen {
-    pub radiance: [Vec3; 2],
+    pub radiance: Vec3,
     pub plane: Option<(Vec3, f32)>,
 }
 
 /// Pixels at the edges between surfaces (silhouettes and creases), box-filtered by camera
 /// rays: for every pixel whose 3x3 neighbourhood's `aa x aa` sub-samples see more than one
 /// surface, and surfaces whose luminance differs by more than [`EDGE_CONTRAST`] of the
-/// image's mean, (pixel index, the mean of the radiance over `rays x rays` n-rooks points of
-/// the pixel minus its mean over the pixel's own sub-samples). `seen(p)` is what the solution
-/// shows through image point `p` (the classical methods' reflected light). Added to the
-/// GPU's pixel, the difference moves the pixel's mix of the surfaces it covers from the
-/// sub-samples' `1 / aa^2` steps to the rays' finer ones, so the mix follows an edge
-/// smoothly as it crosses the pixel instead of in steps that crawl as the camera moves.
+/// image's mean, (pixel index, `shade` of the pixel's `rays x rays` n-rooks points). `seen(p)`
+/// is what the solution shows through image point `p`, which finds the edges; `shade(points)`
+/// is the mean of what the frame shows through the points (the classical methods: their
+/// reflected light, with the same direct light as the GPU's, and its indirect part), which
+/// takes the place of the GPU's pixel. So the pixel's mix of the surfaces it covers goes
+/// from the sub-samples' `1 / aa^2` steps to the rays' finer ones and follows an edge
+/// smoothly as it crosses the pixel, instead of in steps that crawl as the camera moves; and
+/// every ray sees the light the pixel's interior shows, not an estimate of it (an estimate's
+/// error, a step at each edge, would still crawl in the sub-samples' steps).
 pub fn surface_edges(
     (w, h): (u32, u32),
     aa: u32,
     rays: u32,
     scale: f32,
     seen: impl Fn(Vec2) -> Seen + Sync,
+    shade: impl Fn(&[Vec2]) -> [Vec3; 2] + Sync,
 ) -> Vec<(usize, [Vec3; 2])> {
     if rays == 0 || w == 0 || h == 0 {
         return Vec::new();
@@ -184,40 +188,41 @@ pub fn surface_edges(
         _ => false,
     };
     let corner = |k: u32| Vec2::new((k % w) as f32, (k / w) as f32);
-    // Each pixel's sub-samples: their mean radiance, their range of luminance, the plane of
-    // the first and whether all see that plane.
+    // Each pixel's sub-samples: their mean luminance, their range of luminance, the plane
+    // of the first and whether all see that plane.
     struct Subs {
-        mean: [Vec3; 2],
+        mean: f32,
         lo: f32,
         hi: f32,
         plane: Option<(Vec3, f32)>,
         one: bool,
     }
-    let mean = |c: Vec2, n: u32| {
-        let first = seen(c + subsample(0, 0, n));
-        let mut s = Subs {
-            mean: first.radiance,
-            lo: lum(first.radiance[0]),
-            hi: lum(first.radiance[0]),
-            plane: first.plane,
-            one: true,
-        };
-        for i in 1..n * n {
-            let r = seen(c + subsample(i % n, i / n, n));
-            s.mean[0] += r.radiance[0];
-            s.mean[1] += r.radiance[1];
-            s.lo = s.lo.min(lum(r.radiance[0]));
-            s.hi = s.hi.max(lum(r.radiance[0]));
-            s.one &= same(s.plane, r.plane);
-        }
-        s.mean = s.mean.map(|v| v / (n * n) as f32);
-        s
-    };
     let subs: Vec<Subs> = (0..w * h)
         .into_par_iter()
-        .map(|k| mean(corner(k), aa))
+        .map(|k| {
+            let c = corner(k);
+            let first = seen(c + subsample(0, 0, aa));
+            let l = lum(first.radiance);
+            let mut s = Subs {
+                mean: l,
+                lo: l,
+                hi: l,
+                plane: first.plane,
+                one: true,
+            };
+            for i in 1..aa * aa {
+                let r = seen(c + subsample(i % aa, i / aa, aa));
+                let l = lum(r.radiance);
+                s.mean += l;
+                s.lo = s.lo.min(l);
+                s.hi = s.hi.max(l);
+                s.one &= same(s.plane, r.plane);
+            }
+            s.mean /= (aa * aa) as f32;
+            s
+        })
         .collect();
-    let average = subs.iter().map(|s| lum(s.mean[0]) as f64).sum::<f64>() / subs.len() as f64;
+    let average = subs.iter().map(|s| s.mean as f64).sum::<f64>() / subs.len() as f64;
     let threshold = EDGE_CONTRAST * average as f32;
     let edge: Vec<u32> = (0..w * h)
         .filter(|&k| {
@@ -239,10 +244,12 @@ pub fn surface_edges(
         })
         .collect();
     edge.par_iter()
-        .filter_map(|&k| {
-            let (fine, coarse) = (mean(corner(k), rays).mean, subs[k as usize].mean);
-            let delta = [fine[0] - coarse[0], fine[1] - coarse[1]];
-            (delta[0] != Vec3::ZERO).then_some((k as usize, delta))
+        .map(|&k| {
+            let c = corner(k);
+            let points: Vec<Vec2> = (0..rays * rays)
+                .map(|n| c + subsample(n % rays, n / rays, rays))
+                .collect();
+            (k as usize, shade(&points))
         })
         .collect()
 }
@@ -491,13 +498,17 @@ mod tests {
                 let seen = |p: Vec2| {
                     let bright = n.dot(p) > c;
                     Seen {
-                        radiance: [Vec3::splat(bright as u32 as f32), Vec3::ZERO],
+                        radiance: Vec3::splat(bright as u32 as f32),
                         plane: Some((Vec3::Z, if bright { 1.0 } else { 2.0 })),
                     }
                 };
-                let edges = surface_edges((w, h), aa, rays, 1.0, seen);
+                let shade = |points: &[Vec2]| {
+                    let lit = points.iter().filter(|&&p| n.dot(p) > c).count();
+                    [Vec3::splat(lit as f32 / points.len() as f32), Vec3::ZERO]
+                };
+                let edges = surface_edges((w, h), aa, rays, 1.0, seen, shade);
                 // Exact coverage of each pixel (a fine grid), against the sub-samples alone and
-                // with the correction.
+                // box-filtered where an edge is.
                 for y in 0..h {
                     for x in 0..w {
                         let k = (y * w + x) as usize;
@@ -514,9 +525,9 @@ mod tests {
                             .filter(|&i| n.dot(corner + subsample(i % aa, i / aa, aa)) > c)
                             .count() as f32
                             / (aa * aa) as f32;
-                        let delta = edges.iter().find(|e| e.0 == k).map_or(0.0, |e| e.1[0].x);
+                        let boxed = edges.iter().find(|e| e.0 == k).map_or(subs, |e| e.1[0].x);
                         worst[0] = worst[0].max((subs - exact).abs());
-                        worst[1] = worst[1].max((subs + delta - exact).abs());
+                        worst[1] = worst[1].max((boxed - exact).abs());
                     }
                 }
             }
@@ -531,18 +542,16 @@ mod tests {
         // One surface whose light varies steeply (a gradient and a step in its own light, as a
         // sharp shadow) is not an edge between surfaces: left as the sub-samples give it.
         let one = |p: Vec2| Seen {
-            radiance: [
-                Vec3::splat(p.x * 0.3 + (p.y > 7.3) as u32 as f32),
-                Vec3::ZERO,
-            ],
+            radiance: Vec3::splat(p.x * 0.3 + (p.y > 7.3) as u32 as f32),
             plane: Some((Vec3::Z, 1.0)),
         };
-        assert!(surface_edges((w, h), aa, rays, 1.0, one).is_empty());
+        let none = |_: &[Vec2]| [Vec3::splat(f32::NAN); 2];
+        assert!(surface_edges((w, h), aa, rays, 1.0, one, none).is_empty());
         // Two surfaces of the same light (a crease between equally lit walls) neither.
         let crease = |p: Vec2| Seen {
-            radiance: [Vec3::splat(0.5), Vec3::ZERO],
+            radiance: Vec3::splat(0.5),
             plane: Some((if p.x > 7.3 { Vec3::X } else { Vec3::Z }, 1.0)),
         };
-        assert!(surface_edges((w, h), aa, rays, 1.0, crease).is_empty());
+        assert!(surface_edges((w, h), aa, rays, 1.0, crease, none).is_empty());
     }
 }

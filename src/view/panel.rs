@@ -166,7 +166,7 @@ fn settings(ui: &mut Ui, app: &App, inputs: &mut Vec<Input>) {
         }
     }
     ui.horizontal(|ui| {
-        let mut aa = app.cfg.quality.aa;
+        let mut aa = crate::resolve::aa(&app.cfg);
         if ui
             .add(DragValue::new(&mut aa).range(1..=8).prefix("aa "))
             .changed()

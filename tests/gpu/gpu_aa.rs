@@ -267,9 +267,13 @@ fn cornell_mean_luminance_matches_the_path_tracer_with_the_light_in_view() {
     let mean =
         |im: &Hdr| im.data.iter().map(|&c| luminance(c) as f64).sum::<f64>() / im.data.len() as f64;
     let r = mean(&reference);
-    let default_aa = config::Quality::default().aa;
-    assert!(default_aa > 1, "the default does not supersample");
     for method in [Method::Instant, Method::Progressive] {
+        // The default's sub-samples for the method (`--aa 0`: 2 for instant radiosity, 4 for
+        // a classical method).
+        let mut defaults = config(size, 1024, 0, backend);
+        defaults.method = method;
+        let default_aa = irad::resolve::aa(&defaults);
+        assert!(default_aa > 1, "the default does not supersample");
         for aa in [1, default_aa] {
             let mut cfg = config(size, 1024, aa, backend);
             cfg.method = method;
