@@ -441,21 +441,25 @@ fn shade_edge(
             a.as_ref().is_some_and(|a| {
                 probed
                     .iter()
-                    .any(|&(n, o)| n.dot(a.n) > 0.9999 && (o - a.plane.1).abs() <= 1e-5 * scale)
+                    .any(|&p| crate::trace::edges::same_plane(p, a.plane, scale))
             })
         })
         .collect();
     let mut direct = Vec3::ZERO;
+    // Per point, this sample's visibility where a probe traced it.
+    let mut seen: Vec<Option<bool>> = vec![None; at.len()];
     for l in lights {
         // The probes' visibility of this sample: Some(v) if all that it lights agree.
         let mut shared: Option<Option<bool>> = None;
         for (k, a) in at.iter().enumerate() {
+            seen[k] = None;
             let Some(a) = a else { continue };
             if !probe(k) {
                 continue;
             }
             if let Some((_, y, ny)) = l.irradiance_at(a.x, a.n) {
                 let v = !tracer.occluded(a.x, a.n, y, ny);
+                seen[k] = Some(v);
                 shared = match shared {
                     None => Some(Some(v)),
                     Some(Some(s)) if s == v => Some(Some(v)),
@@ -463,11 +467,12 @@ fn shade_edge(
                 };
             }
         }
-        for (a, &on_probed) in at.iter().zip(&on_probed) {
+        for (k, (a, &on_probed)) in at.iter().zip(&on_probed).enumerate() {
             let Some(a) = a else { continue };
             if let Some((e, y, ny)) = l.irradiance_at(a.x, a.n) {
-                let visible = match shared {
-                    Some(Some(v)) if on_probed => v,
+                let visible = match (seen[k], shared) {
+                    (Some(v), _) => v,
+                    (None, Some(Some(v))) if on_probed => v,
                     _ => !tracer.occluded(a.x, a.n, y, ny),
                 };
                 if visible {

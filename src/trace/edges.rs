@@ -184,7 +184,7 @@ pub fn surface_edges(
     let lum = crate::math::luminance;
     let same = |a: Option<(Vec3, f32)>, b: Option<(Vec3, f32)>| match (a, b) {
         (None, None) => true,
-        (Some((na, da)), Some((nb, db))) => na.dot(nb) > 0.9999 && (da - db).abs() <= 1e-5 * scale,
+        (Some(a), Some(b)) => same_plane(a, b, scale),
         _ => false,
     };
     let corner = |k: u32| Vec2::new((k % w) as f32, (k / w) as f32);
@@ -252,6 +252,11 @@ pub fn surface_edges(
             (k as usize, shade(&points))
         })
         .collect()
+}
+
+/// Whether two planes (unit normal, offset along it) are one, in a scene of size `scale`.
+pub fn same_plane((na, da): (Vec3, f32), (nb, db): (Vec3, f32), scale: f32) -> bool {
+    na.dot(nb) > 0.9999 && (da - db).abs() <= 1e-5 * scale
 }
 
 /// The luminance step between two surfaces, as a fraction of the image's mean, above which
