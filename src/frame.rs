@@ -54,12 +54,6 @@ pub struct Pipeline {
     last_lights: Vec<crate::scene::EmitterSample>,
 }
 
-/// The share of the emitters' light within the clamp of them (`compensation::near_field_share`)
-/// from which a render without `--compensate` says so: a tenth (a Cornell box: 0; the white
-/// furnace, whose walls emit, a few percent from its edges; the lamps of `tests/gpu/thin_gap.rs`,
-/// 1 cm to 0 under a ceiling: measured there).
-pub const NEAR_FIELD_NOTE: f32 = 0.1;
-
 /// Prints `note` on stderr unless this process printed it already (a compare builds a pipeline
 /// for each run).
 fn note_once(note: String) {
@@ -83,16 +77,23 @@ impl Pipeline {
         renderer.reuse = !cfg.no_reuse;
         renderer.cull = !cfg.no_cull;
         let params = resolved.sampler;
-        if cfg.quality.compensate == 0 && resolved.radiosity.is_none() {
-            let share = crate::compensation::near_field_share(&frame0, &tracer, params.clamp);
-            if share >= NEAR_FIELD_NOTE {
-                note_once(format!(
-                    "note: scene '{}': {:.0}% of its emitters' light meets a surface within the distance clamp ({:.3}) of where it leaves them (a lamp under a ceiling, against a wall): the clamp darkens what lies that near; --compensate 16 gives it back (docs/math.md, section 4)",
-                    scene.name,
-                    100.0 * share,
-                    params.clamp
-                ));
-            }
+        if let Some(share) = resolved
+            .near_field
+            .filter(|&s| s >= crate::resolve::NEAR_FIELD_SHARE)
+        {
+            let what = match renderer.config.compensate {
+                0 => "the clamp darkens what lies that near; --compensate auto gives it back"
+                    .to_owned(),
+                k => {
+                    format!("compensating the clamp with {k} paths a pixel (--compensate off: not)")
+                }
+            };
+            note_once(format!(
+                "note: scene '{}': {:.0}% of its emitters' light meets a surface within the distance clamp ({:.3}) of where it leaves them (a lamp under a ceiling, against a wall): {what} (docs/math.md, section 4)",
+                scene.name,
+                100.0 * share,
+                params.clamp
+            ));
         }
         let sampler = Sampler::new(params.clone());
         let classical = resolved.radiosity.map(|settings| Classical {

@@ -23,6 +23,39 @@ pub struct Resolved {
     pub sampler: SamplerParams,
     /// A classical method's solver settings (None for instant radiosity).
     pub radiosity: Option<crate::radiosity::RadiositySettings>,
+    /// For instant radiosity without compensation paths given: the share of the emitters'
+    /// light that meets a surface within the distance clamp of where it leaves them
+    /// ([`crate::compensation::near_field_share`]), from which `--compensate auto` chooses.
+    pub near_field: Option<f32>,
+}
+
+/// The share of the emitters' light within the distance clamp of them
+/// ([`crate::compensation::near_field_share`]) from which `--compensate auto` compensates (and
+/// `--compensate off` says what it leaves out): a tenth. A Cornell box sends 0 there, the white
+/// furnace (whose walls emit) a few percent from its edges, the lamps of
+/// `tests/gpu/thin_gap.rs` (1 cm to 0 under a ceiling) 43-46%.
+pub const NEAR_FIELD_SHARE: f32 = 0.1;
+
+/// The paths a pixel `--compensate auto` traces where the near field reaches
+/// [`NEAR_FIELD_SHARE`]. On the gap sweep of `tests/gpu/thin_gap.rs` (seeds 1-4, 32x32, 1024
+/// VPLs) 64 brings the mean bias within 5% at every gap, where 16 leaves +5% to +15% at 1 cm
+/// and 1 mm (a few pixels' paths find the gap's mouth; docs/math.md section 2).
+pub const AUTO_COMPENSATE: u32 = 64;
+
+/// Compensation paths a pixel for `setting` given the scene's near-field share `near_field`
+/// (None: a classical method, which takes none).
+pub fn compensate(setting: crate::gpu::Compensate, near_field: Option<f32>) -> u32 {
+    match (setting, near_field) {
+        (_, None) => 0,
+        (crate::gpu::Compensate::Paths(k), _) => k,
+        (crate::gpu::Compensate::Auto, Some(s)) => {
+            if s >= NEAR_FIELD_SHARE {
+                AUTO_COMPENSATE
+            } else {
+                0
+            }
+        }
+    }
 }
 
 /// Resolves `cfg` (validated) for `scene`, whose frame 0 is `frame0` traced by `tracer`, on an
@@ -69,9 +102,21 @@ pub fn resolve(
     }
     renderer.ism_points = ism_points(cfg, frame0, tracer);
     renderer.num_points = ism_point_set_size(renderer.ism_points, frame0.tris.len());
+    let sampler = sampler_params(cfg, frame0, tracer);
+    let near_field = (cfg.method.solver().is_none()
+        && matches!(
+            cfg.quality.compensate,
+            crate::gpu::Compensate::Auto | crate::gpu::Compensate::Paths(0)
+        ))
+    .then(|| crate::compensation::near_field_share(frame0, tracer, sampler.clamp));
+    renderer.compensate = match cfg.method.solver() {
+        Some(_) => 0,
+        None => compensate(cfg.quality.compensate, Some(near_field.unwrap_or(0.0))),
+    };
     Ok(Resolved {
         renderer,
-        sampler: sampler_params(cfg, frame0, tracer),
+        sampler,
+        near_field,
         radiosity: match cfg.method.solver() {
             Some(solver) => {
                 let s = radiosity_settings(cfg, solver, scene);
@@ -218,7 +263,11 @@ pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
         aa: aa(cfg),
         split_light_samples: cfg.method.solver().is_none(),
         edge_rays: q.edge_rays,
-        compensate: q.compensate,
+        // From the scene's near field for `auto` ([`resolve`], [`compensate`]).
+        compensate: match q.compensate {
+            crate::gpu::Compensate::Paths(k) => k,
+            crate::gpu::Compensate::Auto => 0,
+        },
         accumulate: q.accumulate,
         history: q.history,
         shadow_bias: 1.5,
@@ -401,6 +450,35 @@ pub fn sampler_params(cfg: &Render, frame0: &Frame, tracer: &Tracer) -> SamplerP
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `--compensate auto` (the default) traces [`AUTO_COMPENSATE`] paths a pixel from a near
+    /// field of [`NEAR_FIELD_SHARE`] on and none below it or for a classical method; a count
+    /// given is kept, `off` is none; the flag reads and writes the three forms.
+    #[test]
+    fn compensation_follows_the_near_field() {
+        use crate::gpu::Compensate::{self, Auto, Paths};
+        assert_eq!(compensate(Auto, Some(0.0)), 0);
+        assert_eq!(compensate(Auto, Some(NEAR_FIELD_SHARE * 0.99)), 0);
+        assert_eq!(compensate(Auto, Some(NEAR_FIELD_SHARE)), 64);
+        assert_eq!(compensate(Auto, Some(0.45)), 64);
+        assert_eq!(compensate(Auto, None), 0);
+        assert_eq!(compensate(Paths(16), Some(0.0)), 16);
+        assert_eq!(compensate(Paths(0), Some(0.45)), 0);
+        assert_eq!(compensate(Paths(16), None), 0);
+        for (text, value) in [
+            ("auto", Auto),
+            ("off", Paths(0)),
+            ("0", Paths(0)),
+            ("16", Paths(16)),
+        ] {
+            assert_eq!(text.parse::<Compensate>(), Ok(value), "{text}");
+        }
+        assert_eq!(Paths(16).to_string(), "16");
+        assert_eq!(Paths(0).to_string(), "off");
+        assert_eq!(Auto.to_string(), "auto");
+        assert!("16x".parse::<Compensate>().is_err());
+        assert_eq!(crate::gpu::Quality::default().compensate, Auto);
+    }
 
     /// `--aa 0` (the default) is 2x2 for instant radiosity and 4x4 for the classical methods;
     /// an explicit count is kept.

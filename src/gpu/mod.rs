@@ -24,7 +24,7 @@ use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
 
 pub use profile::Profiling;
-pub use quality::{HistoryMode, Quality, MAX_SIZE};
+pub use quality::{Compensate, HistoryMode, Quality, MAX_SIZE};
 pub use renderer::{graph, GpuFrame, RenderedImage, Renderer, RendererConfig};
 
 /// The shader code every pass shares (structs and helpers), prepended to each pass's WGSL.

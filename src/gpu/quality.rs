@@ -57,9 +57,11 @@ pub struct Quality {
     pub edge_rays: u32,
     /// Clamping-bias compensation: K short paths a pixel (CPU) add back the light the distance
     /// clamp leaves out where surfaces meet within --clamp, and the near field of emitters
-    /// (Kollig & Keller 2004; thin gaps, docs/math.md section 4; 0: off)
+    /// (Kollig & Keller 2004; thin gaps, docs/math.md section 4). `auto`: 64 where a tenth or
+    /// more of the emitters' light meets a surface within the clamp (a lamp under a ceiling,
+    /// in a recess), else off (see `resolve::compensate`); `off` or 0: off; K: 1 to 256
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true))]
-    pub compensate: u32,
+    pub compensate: Compensate,
     /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'
     /// estimates of its surface point (reprojected; a disoccluded pixel starts anew); under a
     /// moving light or object --history says what becomes of it (0 or 1: off, every frame
@@ -102,9 +104,9 @@ impl Default for Quality {
             // at 1.5x its frame's time; instant radiosity's emitter edges cost 1.9 ms at 256x256
             // (0.7 ms at 8).
             edge_rays: 16,
-            // Off: 16 paths a pixel take a 256x256 Cornell frame from 0.14 s to 0.35 s (docs/math.md
-            // section 4); a render whose emitters light surfaces within the clamp says so.
-            compensate: 0,
+            // Only where the scene needs it: 16 paths a pixel take a 256x256 Cornell frame from
+            // 0.14 s to 0.35 s (docs/math.md section 4), and no built-in scene needs it.
+            compensate: Compensate::Auto,
             // 8 frames, the history weighed by the light's gradient under a moving light or
             // object: on the built-in animations at 96x96 with 256 VPLs, against 2048-spp
             // references, mh's median relMSE and warped flicker fall to 0.31-0.69x and
@@ -137,7 +139,49 @@ impl Quality {
         check::int("`interleave`", self.interleave, 0, 8)?;
         check::int("`aa`", self.aa, 0, 8)?;
         check::int("`edge_rays`", self.edge_rays, 0, 32)?;
-        check::int("`compensate`", self.compensate, 0, 256)?;
+        if let Compensate::Paths(k) = self.compensate {
+            check::int("`compensate`", k, 0, 256)?;
+        }
         check::int("`accumulate`", self.accumulate, 0, 4096)
+    }
+}
+
+/// `--compensate`: how many compensation paths a pixel traces ([`crate::compensation`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compensate {
+    /// From the scene: [`crate::resolve::AUTO_COMPENSATE`] paths a pixel where a tenth or more
+    /// of its emitters' light meets a surface within the distance clamp, else none.
+    Auto,
+    /// K paths a pixel (0: off).
+    Paths(u32),
+}
+
+impl std::fmt::Display for Compensate {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Compensate::Auto => f.write_str("auto"),
+            Compensate::Paths(0) => f.write_str("off"),
+            Compensate::Paths(k) => write!(f, "{k}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Compensate {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s.trim() {
+            "auto" => Ok(Compensate::Auto),
+            "off" => Ok(Compensate::Paths(0)),
+            n => n.parse().map(Compensate::Paths).map_err(|_| {
+                format!("'{s}' is not auto, off or a count of paths a pixel (0 to 256)")
+            }),
+        }
+    }
+}
+
+/// As written on the command line: "auto", "off" or the count.
+impl Serialize for Compensate {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
     }
 }

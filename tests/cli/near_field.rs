@@ -1,6 +1,7 @@
 //! A render says when its emitters' light meets a surface within the distance clamp (a lamp
-//! under a ceiling), the case only `--compensate` renders right (docs/math.md section 4), and
-//! says nothing where the light leaves into the room or with `--compensate` given.
+//! under a ceiling), the case only compensation renders right (docs/math.md section 4): that
+//! `--compensate auto` (the default) compensates it, or with `--compensate off` what that leaves
+//! out; nothing where the light leaves into the room or with a count given.
 
 use crate::common::{self, irad, quads::Quads};
 use serde_json::json;
@@ -56,10 +57,15 @@ fn a_lamp_facing_a_ceiling_within_the_clamp_gets_a_note() {
     assert!(
         note.starts_with("note: scene")
             && note.contains("100%")
-            && note.contains("--compensate 16"),
+            && note.contains("compensating the clamp with 64 paths a pixel"),
         "{note}"
     );
     assert_eq!(render_note(false, &[]), None, "a lamp lighting the room");
+    let off = render_note(true, &["--compensate", "off"]).expect("no note with --compensate off");
+    assert!(
+        off.contains("darkens") && off.contains("--compensate auto"),
+        "{off}"
+    );
     assert_eq!(
         render_note(true, &["--compensate", "4"]),
         None,

@@ -95,6 +95,6 @@ fn no_built_in_scene_is_told_to_compensate() {
         let clamp = irad::resolve::sampler_params(&cfg, &f, &t).clamp;
         let share = irad::compensation::near_field_share(&f, &t, clamp);
         println!("{name}: clamp {clamp:.4}, near field {share:.3}");
-        assert!(share < irad::frame::NEAR_FIELD_NOTE, "{name}: {share}");
+        assert!(share < irad::resolve::NEAR_FIELD_SHARE, "{name}: {share}");
     }
 }

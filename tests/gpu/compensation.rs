@@ -29,7 +29,7 @@ fn render_scene(name: &str, size: u32, clamp: f32, rays: u32, light_samples: u32
     };
     c.vpls = 1024;
     c.clamp = Some(clamp);
-    c.quality.compensate = rays;
+    c.quality.compensate = irad::gpu::Compensate::Paths(rays);
     c.quality.light_samples = light_samples;
     let scene = builtin::load(name).unwrap().unwrap();
     let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(c.backend).unwrap());

@@ -21,6 +21,7 @@
 
 use crate::common;
 use base64::Engine;
+use irad::gpu::Compensate;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
@@ -198,9 +199,11 @@ fn gpu_matches_the_reference_on_a_blender_style_cornell_box() {
     // Before: +28% mean and relMSE 2.96 (64x64, 256 VPLs); the image away from the light
     // 2.2-3.5x the reference's. At 386cd23: -3.4%, relMSE 0.59 (light paths inside the
     // closed lamp leaking through the ISMs, by chance near the mean for seed 1: +115% to
-    // +6368% over seeds 1-3 at 32x32). Measured now: -15.5% and relMSE 0.220 (the VPLs' mean
-    // is below the reference's at a 1 cm gap: see the sweep below and docs/math.md, "Light
-    // that cannot get out"); tolerances about 1.3x those.
+    // +6368% over seeds 1-3 at 32x32). Without compensation -15.5% and relMSE 0.220 (the
+    // VPLs' mean is below the reference's at a 1 cm gap: see the sweep below and docs/math.md,
+    // "Light that cannot get out"). Measured now, `--compensate auto` tracing 64 paths a pixel:
+    // +4.2% and relMSE 0.228; at this gap single seeds run -10% to +17% (the sweep below), so
+    // the bound on the mean stays at 20%.
     let mut images = String::new();
     if e.rel_bias.abs() >= 0.20 || e.rel_mse >= 0.30 {
         images = format!(
@@ -217,13 +220,13 @@ fn gpu_matches_the_reference_on_a_blender_style_cornell_box() {
 const GAPS: [f32; 5] = [0.01, 0.001, 1e-4, 1e-5, 0.0];
 
 /// Frame 0 of `scene` at `size`^2 with 1024 VPLs of `sampler` (default settings otherwise, as
-/// `irad render` makes it, but for `compensate` paths a pixel), seed `seed`.
+/// `irad render` makes it, but for `compensate`), seed `seed`.
 fn gpu_frame(
     scene: &irad::scene::Scene,
     size: u32,
     sampler: irad::vpl::sampler::SamplerKind,
     seed: u64,
-    compensate: u32,
+    compensate: Compensate,
 ) -> irad::image::Hdr {
     let mut cfg = common::render_config();
     cfg.sequence.size = irad::config::Size {
@@ -246,7 +249,11 @@ type Row = (f32, bool, Vec<irad::metrics::FrameError>);
 
 /// The sweep: every gap, double- and single-sided, the GPU frame (`compensate` paths a pixel)
 /// of each seed against the reference (32 x 32, 1024 samples a pixel); prints the table.
-fn sweep(sampler: irad::vpl::sampler::SamplerKind, seeds: &[u64], compensate: u32) -> Vec<Row> {
+fn sweep(
+    sampler: irad::vpl::sampler::SamplerKind,
+    seeds: &[u64],
+    compensate: Compensate,
+) -> Vec<Row> {
     let size = 32;
     println!(
         "gap sweep, {sampler:?} seeds {seeds:?}, --compensate {compensate}, 1024 VPLs, \
@@ -298,13 +305,51 @@ fn mean_bias(errors: &[irad::metrics::FrameError]) -> f64 {
 
 const TEST: &str = "thin_gap";
 
-/// Issue 23 item 1: whatever the gap between a closed emissive slab and an albedo-1 ceiling,
-/// its VPLs light only what they see. Before (at 386cd23, 3 seeds): double-sided +80% to
-/// +18822% (light paths inside the closed lamp and, through offsets, inside the ceiling);
-/// single-sided 1 mm relMSE 3.46.
+/// Issue 23 item 1 at the defaults: whatever the gap between a closed emissive slab and an
+/// albedo-1 ceiling, its VPLs light only what they see, and what the distance clamp cannot
+/// give (the camera's view into the gap's mouth, the ceiling beside the lamp, lit by emitter
+/// points closer than the clamp) is path-traced: every lamp of the sweep sends 43-46% of its
+/// light within the clamp, so `--compensate auto` traces 64 paths a pixel
+/// (`resolve::compensate`). Over seeds 1-4 the mean bias is within 5% at every gap, double- and
+/// single-sided. Before (at 386cd23, 3 seeds): double-sided +80% to +18822% (light paths
+/// inside the closed lamp and, through offsets, inside the ceiling); single-sided 1 mm relMSE
+/// 3.46. Without compensation (the test below) the double-sided rows are -3% to -14%.
 #[test]
 fn the_gap_sweep_against_the_reference() {
-    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, &[1], 0);
+    let rows = sweep(
+        irad::vpl::sampler::SamplerKind::Uniform,
+        &[1, 2, 3, 4],
+        Compensate::Auto,
+    );
+    for (gap, double, e) in rows {
+        let (mse, bias) = (largest_mse(&e), mean_bias(&e));
+        // Measured (docs/math.md): the mean bias -4.4% to +4.4%; the largest relMSE 0.038
+        // at 0.1 mm and less, 0.049 and 0.063 at 1 mm, 1.16 and 0.30 at 1 cm (whose 1024-spp
+        // reference's own relMSE is about 0.19: camera paths that find the gap's mouth, and
+        // 1024 VPLs from 270-430 light paths leave blotches).
+        let mse_bound = match (gap, double) {
+            (g, true) if g >= 0.01 => 1.5,
+            (g, false) if g >= 0.01 => 0.4,
+            (g, false) if g >= 0.001 => 0.08,
+            _ => 0.05,
+        };
+        assert!(
+            mse <= mse_bound && bias.abs() <= 0.05,
+            "gap {gap} m, double-sided {double}: relMSE {mse:.4} (bound {mse_bound}), mean bias {bias:+.3}"
+        );
+    }
+}
+
+/// The same sweep with `--compensate off`: the VPLs alone. No light leaks through the gap,
+/// but the clamp darkens the gap's mouth and the ceiling beside the lamp (docs/math.md,
+/// "Light that cannot get out").
+#[test]
+fn the_gap_sweep_without_compensation() {
+    let rows = sweep(
+        irad::vpl::sampler::SamplerKind::Uniform,
+        &[1],
+        Compensate::Paths(0),
+    );
     for (gap, double, e) in rows {
         let e = &e[0];
         // Measured with seed 1: the table in docs/math.md (seed 2 within these too). The 1 cm
@@ -327,36 +372,11 @@ fn the_gap_sweep_against_the_reference() {
     }
 }
 
-/// The light the clamp cannot give, given back: with `--compensate 64` the camera's view into
-/// the gap's mouth and the ceiling beside the lamp (lit by emitter points closer than the
-/// clamp) are path-traced (`compensation`), and over seeds 1-4 the mean bias is within 5% at
-/// every gap, double- and single-sided. Without it (the test above, and docs/math.md) the
-/// double-sided lamp's rows were -6% to -14% over the same seeds.
-#[test]
-fn the_gap_sweep_with_compensation() {
-    let rows = sweep(irad::vpl::sampler::SamplerKind::Uniform, &[1, 2, 3, 4], 64);
-    for (gap, double, e) in rows {
-        let (mse, bias) = (largest_mse(&e), mean_bias(&e));
-        // Measured (docs/math.md): the mean bias -4.2% to +4.4%; the largest relMSE 0.038
-        // at 0.1 mm and less, 0.049 and 0.063 at 1 mm, 0.30 and 1.16 at 1 cm (whose 1024-spp
-        // reference's own relMSE is about 0.19: camera paths that find the gap's mouth).
-        let mse_bound = match (gap, double) {
-            (g, _) if g >= 0.01 => f64::INFINITY,
-            (g, false) if g >= 0.001 => 0.08,
-            _ => 0.05,
-        };
-        assert!(
-            mse <= mse_bound && bias.abs() <= 0.05,
-            "gap {gap} m, double-sided {double}: relMSE {mse:.4} (bound {mse_bound}), mean bias {bias:+.3}"
-        );
-    }
-}
-
 /// The default sampler on the same sweep (a measurement: `--ignored`).
 #[test]
 #[ignore]
 fn the_gap_sweep_with_mh() {
-    sweep(irad::vpl::sampler::SamplerKind::Mh, &[1], 0);
+    sweep(irad::vpl::sampler::SamplerKind::Mh, &[1], Compensate::Auto);
 }
 
 /// Light paths end inside a closed mesh only when the camera is outside it: a room modelled
@@ -415,11 +435,12 @@ fn light_paths_live_in_a_closed_box_only_when_the_camera_is_inside() {
     assert_eq!(in_lamp, 0, "{in_lamp} of {} VPLs inside the lamp", v.len());
 }
 
-/// Every lamp of the sweep sends more than `frame::NEAR_FIELD_NOTE` of its light into the
-/// ceiling within the clamp, so a render of it without `--compensate` says so (the note of
-/// `frame::Pipeline::new`, tests/cli/near_field.rs); the Cornell box's lamp sends none.
+/// Every lamp of the sweep sends more than `resolve::NEAR_FIELD_SHARE` of its light into the
+/// ceiling within the clamp, so `--compensate auto` compensates it (and a render with
+/// `--compensate off` says what that leaves out: tests/cli/near_field.rs); the Cornell box's
+/// lamp sends none, and gets no compensation.
 #[test]
-fn every_lamp_of_the_sweep_is_told_to_compensate() {
+fn every_lamp_of_the_sweep_is_compensated() {
     let share = |scene: &irad::scene::Scene| {
         let f = scene.at(0.0);
         let t = irad::trace::Tracer::new(&f);
@@ -427,16 +448,19 @@ fn every_lamp_of_the_sweep_is_told_to_compensate() {
         let clamp = irad::resolve::sampler_params(&cfg, &f, &t).clamp;
         (irad::compensation::near_field_share(&f, &t, clamp), clamp)
     };
+    let auto = |s: f32| irad::resolve::compensate(Compensate::Auto, Some(s));
     for double in [true, false] {
         for gap in GAPS {
             let (s, clamp) = share(&common::quads::load(&cornell_with_gap(gap, double)));
             println!("gap {gap} m, double-sided {double}: clamp {clamp:.4}, near field {s:.3}");
             assert!(
-                s >= irad::frame::NEAR_FIELD_NOTE,
+                s >= irad::resolve::NEAR_FIELD_SHARE,
                 "gap {gap}, {double}: {s}"
             );
+            assert_eq!(auto(s), irad::resolve::AUTO_COMPENSATE);
         }
     }
     let cornell = irad::scene::builtin::load("cornell").unwrap().unwrap();
-    assert_eq!(share(&cornell).0, 0.0);
+    let (s, _) = share(&cornell);
+    assert_eq!((s, auto(s)), (0.0, 0));
 }
