@@ -6,7 +6,8 @@
 //! run's frame_FFFF.exr (frames 0.., 24 fps), REFERENCE an `irad compare` cache folder with
 //! its two halves in a/ and b/ (docs/antialiasing.md quotes its output). `PER_FRAME=1` also
 //! prints each frame pair's emitter-edge share; `MAP=FILE.png` writes each pixel's flicker
-//! less the floor's (red: more, blue: less; 1.0 at 0.01 a frame pair).
+//! less the floor's (red: more, blue: less; 1.0 at 0.01 a frame pair); `RAW=FILE` the same
+//! as little-endian f32 a pixel, row by row.
 use glam::Vec3;
 use irad::image::Hdr;
 use irad::metrics::warp;
@@ -101,6 +102,15 @@ fn main() -> anyhow::Result<()> {
             *o = Vec3::new(v.max(0.0), 0.0, (-v).max(0.0));
         }
         map.write_png(std::path::Path::new(&path), 1.0)?;
+    }
+    if let Ok(path) = std::env::var("RAW") {
+        // Each pixel's excess over the floor a frame pair, as little-endian f32, row by row.
+        let n = (frames.len() - 1) as f64;
+        let bytes: Vec<u8> = excess
+            .iter()
+            .flat_map(|&v| ((v / n) as f32).to_le_bytes())
+            .collect();
+        std::fs::write(&path, bytes)?;
     }
     if let Ok(path) = std::env::var("ERR") {
         // The middle frame's signed error against the reference (red: too bright, blue: too
