@@ -32,6 +32,16 @@ pub struct Patch {
     pub area: f32,
 }
 
+/// Points (barycentrics) of an element at which [`Mesh::open_fractions`] looks out.
+const OPEN_POINTS: [[f32; 2]; 4] = [
+    [1.0 / 3.0, 1.0 / 3.0],
+    [2.0 / 3.0, 1.0 / 6.0],
+    [1.0 / 6.0, 2.0 / 3.0],
+    [1.0 / 6.0, 1.0 / 6.0],
+];
+/// Rays from each of [`OPEN_POINTS`].
+const OPEN_RAYS: u32 = 8;
+
 /// A conforming triangle mesh of elements.
 #[derive(Clone, Debug, Default)]
 pub struct Mesh {
@@ -44,6 +54,9 @@ pub struct Mesh {
     edges: HashMap<(u32, u32), Vec<u32>>,
     /// Midpoint vertex of each edge split so far.
     midpoints: HashMap<(u32, u32), u32>,
+    /// Per element, the share of it that is open ([`Mesh::open_fractions`]): what
+    /// [`Mesh::corner_values`] weighs it by. Empty: every element open (not measured).
+    pub open: Vec<f32>,
 }
 
 fn key(a: u32, b: u32) -> (u32, u32) {
@@ -500,9 +513,56 @@ impl Mesh {
         out
     }
 
-    /// Gouraud values: for each element corner, the area-weighted mean of `value` over the
-    /// elements around that vertex that lie in the same plane direction and came from a
-    /// triangle of the same material (so colours do not bleed around corners). Where the mesh
+    /// Per element, the share of its area that is open: of [`OPEN_POINTS`] points on it, those
+    /// from which two or more of [`OPEN_RAYS`] cosine-distributed rays get out, a ray being
+    /// kept in when it meets a surface within the element's longest edge or first strikes a
+    /// solid from inside (`Tracer::struck_inside_solid`). A covered element is one on which
+    /// something lies: the ceiling behind a lamp mounted just under it, the floor under a box
+    /// standing on it. No light reaches it and the camera never sees it, so its radiance
+    /// (about 0, or a parent's in hierarchical radiosity) is not the light of the surface
+    /// around it. A crease's elements stay open (half their rays get out), a corner's too
+    /// (a quarter).
+    pub fn open_fractions(&self, frame: &Frame, tracer: &crate::trace::Tracer) -> Vec<f32> {
+        use rayon::prelude::*;
+        (0..self.elems.len())
+            .into_par_iter()
+            .map(|e| {
+                let n = self.elems[e].normal;
+                let [a, b, c] = self.corners(e);
+                let reach = [(a - b).length(), (b - c).length(), (c - a).length()]
+                    .into_iter()
+                    .fold(0.0f32, f32::max);
+                let open = OPEN_POINTS
+                    .iter()
+                    .filter(|&&[u, v]| {
+                        let x = a * (1.0 - u - v) + b * u + c * v;
+                        let out = (0..OPEN_RAYS)
+                            .filter(|&k| {
+                                // Stratified in the polar angle, a golden-ratio step in azimuth.
+                                let uv = glam::Vec2::new(
+                                    (k as f32 + 0.5) / OPEN_RAYS as f32,
+                                    (k as f32 * 0.618_034 + u).fract(),
+                                );
+                                let w = crate::math::cosine_hemisphere(n, uv);
+                                let origin = tracer.offset(x, n, w);
+                                tracer.intersect(origin, w, f32::INFINITY).is_none_or(|h| {
+                                    let ng = frame.normals[h.tri as usize];
+                                    h.t > reach && !tracer.struck_inside_solid(h.tri, ng, w)
+                                })
+                            })
+                            .count();
+                        out >= 2
+                    })
+                    .count();
+                open as f32 / OPEN_POINTS.len() as f32
+            })
+            .collect()
+    }
+
+    /// Gouraud values: for each element corner, the mean of `value` over the elements around
+    /// that vertex that lie in the same plane direction and came from a triangle of the same
+    /// material (so colours do not bleed around corners), weighted by their area and by
+    /// their open share ([`Mesh::open`]; all of them where none is open). Where the mesh
     /// is not conforming (hierarchical radiosity's leaves: an element's edge holds another
     /// element's corner, a T-vertex), the corner at the T-vertex takes the value the longer
     /// edge interpolates there, longest edges first, so the shading is continuous across every
@@ -519,19 +579,23 @@ impl Mesh {
             .iter()
             .map(|e| {
                 e.v.map(|v| {
-                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-                    for &o in &around[v as usize] {
-                        let eo = &self.elems[o as usize];
-                        if alike(e, eo) {
-                            sum += value[o as usize] * eo.area;
-                            w += eo.area;
+                    let mean = |open: bool| {
+                        let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                        for &o in &around[v as usize] {
+                            let eo = &self.elems[o as usize];
+                            if alike(e, eo) {
+                                let share = if open {
+                                    self.open.get(o as usize).copied().unwrap_or(1.0)
+                                } else {
+                                    1.0
+                                };
+                                sum += value[o as usize] * eo.area * share;
+                                w += eo.area * share;
+                            }
                         }
-                    }
-                    if w > 0.0 {
-                        sum / w
-                    } else {
-                        Vec3::ZERO
-                    }
+                        (w > 0.0).then(|| sum / w)
+                    };
+                    mean(true).or_else(|| mean(false)).unwrap_or(Vec3::ZERO)
                 })
             })
             .collect();
@@ -794,6 +858,115 @@ mod tests {
                 assert!((got[e][j] - sum / w).abs().max_element() < 1e-5);
             }
         }
+    }
+
+    /// `open_fractions` finds what lies under a cover in the Cornell box, checked against the
+    /// covers found from the geometry: the floor under the two boxes (the small one stands on
+    /// it, the large one's base lies 1 cm under it) and the ceiling behind the lamp (1 cm under
+    /// it, facing down). Elements wholly under a cover are closed, elements a diameter or
+    /// more away from every cover's outline open, every back-wall element too (its creases
+    /// and corners included). Gouraud then leaves the covered elements out: with 1 on open
+    /// elements and 0 on closed ones, every open element's corners are 1 (the area-weighted
+    /// mean over all of them pulled the corners on each outline down to as little as 0.125:
+    /// a dark ring around the lamp and the boxes' bases).
+    #[test]
+    fn covered_elements_are_found_and_left_out_of_gouraud() {
+        use glam::Vec2;
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        // As the solvers trace: every surface double-sided (the lamp's back hides the ceiling).
+        let tracer = crate::trace::Tracer::two_sided(&f);
+        let mut m = Mesh::uniform(&f, 0.05, 1_000_000);
+        m.open = m.open_fractions(&f, &tracer);
+        let xz = |p: Vec3| Vec2::new(p.x, p.z);
+        // Down-facing triangles near a plane at height y: the covers of the surface there.
+        let covers = |lo: f32, hi: f32| -> Vec<[Vec2; 3]> {
+            (0..f.tris.len())
+                .filter(|&t| {
+                    f.normals[t].y < -0.99 && f.tris[t].iter().all(|p| p.y >= lo && p.y <= hi)
+                })
+                .map(|t| f.tris[t].map(xz))
+                .collect()
+        };
+        let (floor, ceiling) = (covers(-1.05, -0.999), covers(0.95, 0.999));
+        assert_eq!((floor.len(), ceiling.len()), (4, 2));
+        let cross = |a: Vec2, b: Vec2, p: Vec2| (b - a).perp_dot(p - a);
+        let inside = |t: &[Vec2; 3], p: Vec2| {
+            let s = [
+                cross(t[0], t[1], p),
+                cross(t[1], t[2], p),
+                cross(t[2], t[0], p),
+            ];
+            s.iter().all(|&x| x >= 0.0) || s.iter().all(|&x| x <= 0.0)
+        };
+        let to_edge = |t: &[Vec2; 3], p: Vec2| {
+            (0..3)
+                .map(|i| {
+                    let (a, b) = (t[i], t[(i + 1) % 3]);
+                    let h = ((p - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                    (p - a - (b - a) * h).length()
+                })
+                .fold(f32::INFINITY, f32::min)
+        };
+        let (mut closed, mut open) = ([0; 2], [0; 2]);
+        for e in 0..m.len() {
+            let el = &m.elems[e];
+            let c = m.corners(e).map(xz);
+            let (side, cv) = match el.normal.y {
+                y if y > 0.99 && m.centroid(e).y < -0.99 => (0, &floor),
+                y if y < -0.99 && m.centroid(e).y > 0.999 => (1, &ceiling),
+                _ => continue,
+            };
+            let under = |p: Vec2| cv.iter().any(|t| inside(t, p));
+            let near = |p: Vec2| cv.iter().any(|t| to_edge(t, p) < m.diameter(e));
+            if c.iter().all(|&p| under(p))
+                && under(xz(m.centroid(e)))
+                && !c.iter().any(|&p| near(p))
+            {
+                assert_eq!(
+                    m.open[e],
+                    0.0,
+                    "element {e} at {} is covered",
+                    m.centroid(e)
+                );
+                closed[side] += 1;
+            } else if !c.iter().any(|&p| under(p) || near(p)) {
+                assert_eq!(m.open[e], 1.0, "element {e} at {} is open", m.centroid(e));
+                open[side] += 1;
+            }
+        }
+        println!("closed (floor, ceiling) {closed:?}, open {open:?}");
+        assert!(closed[0] > 50 && closed[1] > 10, "closed {closed:?}");
+        assert!(open[0] > 500 && open[1] > 500, "open {open:?}");
+        for e in (0..m.len()).filter(|&e| m.elems[e].normal.z > 0.99) {
+            assert_eq!(m.open[e], 1.0, "back wall element at {}", m.centroid(e));
+        }
+        // Gouraud: 1 on open elements, 0 on closed ones.
+        let value: Vec<Vec3> = m
+            .open
+            .iter()
+            .map(|&o| Vec3::splat((o > 0.0) as u8 as f32))
+            .collect();
+        let lowest = |m: &Mesh| {
+            let corners = m.corner_values(&f, &value);
+            (0..m.len())
+                .filter(|&e| value[e].x > 0.0)
+                .flat_map(|e| corners[e])
+                .map(|c| c.x)
+                .fold(f32::INFINITY, f32::min)
+        };
+        assert!((lowest(&m) - 1.0).abs() < 1e-6, "{}", lowest(&m));
+        let mut all = m.clone();
+        all.open.clear();
+        println!(
+            "lowest open corner {}, without the open shares {}",
+            lowest(&m),
+            lowest(&all)
+        );
+        assert!(
+            lowest(&all) < 0.2,
+            "without the open shares: {}",
+            lowest(&all)
+        );
     }
 
     #[test]

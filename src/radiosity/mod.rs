@@ -444,6 +444,8 @@ pub fn solve_with(
             break sol;
         }
     };
+    // Gouraud leaves out what lies under a cover (a lamp's back, a box's base).
+    sol.mesh.open = sol.mesh.open_fractions(frame, tracer);
     sol.stats.refinements = rounds;
     sol.stats.discontinuities = discontinuities;
     sol.stats.cut_vertices = cut_vertices;
