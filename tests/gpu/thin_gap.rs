@@ -254,17 +254,27 @@ fn sweep(
     seeds: &[u64],
     compensate: Compensate,
 ) -> Vec<Row> {
+    sweep_against(sampler, seeds, compensate, 1024)
+}
+
+/// [`sweep`] against a reference of `spp` samples a pixel.
+fn sweep_against(
+    sampler: irad::vpl::sampler::SamplerKind,
+    seeds: &[u64],
+    compensate: Compensate,
+    spp: u32,
+) -> Vec<Row> {
     let size = 32;
     println!(
         "gap sweep, {sampler:?} seeds {seeds:?}, --compensate {compensate}, 1024 VPLs, \
-         {size}x{size}, reference 1024 spp"
+         {size}x{size}, reference {spp} spp"
     );
     println!("| gap | sides | relMSE (largest) | bias: mean (each seed) |");
     let mut rows = Vec::new();
     for double in [true, false] {
         for gap in GAPS {
             let scene = common::quads::load(&cornell_with_gap(gap, double));
-            let r = common::reference_frame(&scene, size, 1024);
+            let r = common::reference_frame(&scene, size, spp);
             let sides = if double { "double" } else { "single" };
             let errors: Vec<_> = seeds
                 .iter()
@@ -370,6 +380,20 @@ fn the_gap_sweep_without_compensation() {
             e.rel_bias
         );
     }
+}
+
+/// The sweep at the defaults against 8192-spp references (a measurement: `--ignored`): how
+/// much of the largest relMSEs of [`the_gap_sweep_against_the_reference`] is the 1024-spp
+/// reference's own noise.
+#[test]
+#[ignore]
+fn the_gap_sweep_against_8192_spp() {
+    sweep_against(
+        irad::vpl::sampler::SamplerKind::Uniform,
+        &[1, 2, 3, 4],
+        Compensate::Auto,
+        8192,
+    );
 }
 
 /// The default sampler on the same sweep (a measurement: `--ignored`).
