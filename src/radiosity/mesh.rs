@@ -514,9 +514,9 @@ impl Mesh {
     }
 
     /// Per element, the share of its area that is open: of [`OPEN_POINTS`] points on it, those
-    /// from which two or more of [`OPEN_RAYS`] cosine-distributed rays get out, a ray being
-    /// kept in when it meets a surface within the element's longest edge or first strikes a
-    /// solid from inside (`Tracer::struck_inside_solid`). A covered element is one on which
+    /// from which two or more of [`OPEN_RAYS`] cosine-distributed rays get out (meet no surface
+    /// within the element's longest edge) and which lie in no solid (the first ray strikes
+    /// none from inside: `Tracer::struck_inside_solid`). A covered element is one on which
     /// something lies: the ceiling behind a lamp mounted just under it, the floor under a box
     /// standing on it. No light reaches it and the camera never sees it, so its radiance
     /// (about 0, or a parent's in hierarchical radiosity) is not the light of the surface
@@ -536,22 +536,28 @@ impl Mesh {
                     .iter()
                     .filter(|&&[u, v]| {
                         let x = a * (1.0 - u - v) + b * u + c * v;
+                        // Stratified in the polar angle, a golden-ratio step in azimuth.
+                        let ray = |k: u32| {
+                            let uv = glam::Vec2::new(
+                                (k as f32 + 0.5) / OPEN_RAYS as f32,
+                                (k as f32 * 0.618_034 + u).fract(),
+                            );
+                            let w = crate::math::cosine_hemisphere(n, uv);
+                            (tracer.offset(x, n, w), w)
+                        };
+                        // Inside a solid every ray strikes it from inside first, outside none
+                        // does: one ray tells.
+                        let (o, w) = ray(0);
+                        let inside = tracer.intersect(o, w, f32::INFINITY).is_some_and(|h| {
+                            tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], w)
+                        });
                         let out = (0..OPEN_RAYS)
                             .filter(|&k| {
-                                // Stratified in the polar angle, a golden-ratio step in azimuth.
-                                let uv = glam::Vec2::new(
-                                    (k as f32 + 0.5) / OPEN_RAYS as f32,
-                                    (k as f32 * 0.618_034 + u).fract(),
-                                );
-                                let w = crate::math::cosine_hemisphere(n, uv);
-                                let origin = tracer.offset(x, n, w);
-                                tracer.intersect(origin, w, f32::INFINITY).is_none_or(|h| {
-                                    let ng = frame.normals[h.tri as usize];
-                                    h.t > reach && !tracer.struck_inside_solid(h.tri, ng, w)
-                                })
+                                let (o, w) = ray(k);
+                                tracer.intersect(o, w, reach).is_none()
                             })
                             .count();
-                        out >= 2
+                        !inside && out >= 2
                     })
                     .count();
                 open as f32 / OPEN_POINTS.len() as f32
