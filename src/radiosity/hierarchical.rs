@@ -1073,7 +1073,11 @@ pub fn solve(
         .iter()
         .map(|&i| (tree.nodes[i].c, tree.nodes[i].source, tree.nodes[i].n))
         .collect();
-    let mesh = Mesh::from_triangles(&tris);
+    let mut mesh = Mesh::from_triangles(&tris);
+    // On `cornell-orbit` (seed 1, 96x96, against the 8192-spp reference) a radius of a third
+    // of the top patches (0.2) took the own warped flicker from 0.000222 to 0.000205 and relMSE
+    // from 0.000854 to 0.000745; 0.1 and 0.3 gained less, 0.45 lost (relMSE 0.00113).
+    mesh.smooth = p.top_size / 3.0;
     let radiance: Vec<Vec3> = leaves.iter().map(|&i| solved[i]).collect();
     let emission: Vec<Vec3> = leaves.iter().map(|&i| tree.nodes[i].le).collect();
     let rho: Vec<Vec3> = leaves.iter().map(|&i| tree.nodes[i].rho).collect();

@@ -57,6 +57,11 @@ pub struct Mesh {
     /// Per element, the share of it that is open ([`Mesh::open_fractions`]): what
     /// [`Mesh::corner_values`] weighs it by. Empty: every element open (not measured).
     pub open: Vec<f32>,
+    /// The radius over which [`Mesh::corner_values`] averages a vertex's value (0: the
+    /// elements that hold the vertex). Hierarchical radiosity's leaves take their light mostly
+    /// from links at their ancestors' level, constant over each and stepping at their borders;
+    /// its solve sets this to a third of its top patches' size.
+    pub smooth: f32,
 }
 
 fn key(a: u32, b: u32) -> (u32, u32) {
@@ -568,7 +573,9 @@ impl Mesh {
     /// Gouraud values: for each element corner, the mean of `value` over the elements around
     /// that vertex that lie in the same plane direction and came from a triangle of the same
     /// material (so colours do not bleed around corners), weighted by their area and by
-    /// their open share ([`Mesh::open`]; all of them where none is open). Where the mesh
+    /// their open share ([`Mesh::open`]; all of them where none is open); with
+    /// [`Mesh::smooth`], over those of the vertex's plane whose centroids lie within it,
+    /// weighted by a tent too. Where the mesh
     /// is not conforming (hierarchical radiosity's leaves: an element's edge holds another
     /// element's corner, a T-vertex), the corner at the T-vertex takes the value the longer
     /// edge interpolates there, longest edges first, so the shading is continuous across every
@@ -580,6 +587,43 @@ impl Mesh {
             a.normal.dot(b.normal) > 0.99
                 && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
         };
+        // Elements by cell of side `smooth`, for the smoothed means.
+        let cell = |q: Vec3| (q / self.smooth).floor().as_ivec3();
+        let mut grid: HashMap<glam::IVec3, Vec<u32>> = HashMap::new();
+        if self.smooth > 0.0 {
+            for o in 0..self.elems.len() {
+                grid.entry(cell(self.centroid(o)))
+                    .or_default()
+                    .push(o as u32);
+            }
+        }
+        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
+        // The tent-weighted mean (radius `smooth`) over the alike elements of `e`'s plane
+        // whose centroids lie within it.
+        let smoothed = |e: &Element, p: Vec3| {
+            let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+            let k = cell(p);
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    for dz in -1..=1 {
+                        let Some(list) = grid.get(&(k + glam::IVec3::new(dx, dy, dz))) else {
+                            continue;
+                        };
+                        for &o in list {
+                            let (eo, c) = (&self.elems[o as usize], self.centroid(o as usize));
+                            if !alike(e, eo) || e.normal.dot(c - p).abs() > 1e-4 * self.smooth {
+                                continue;
+                            }
+                            let t = (1.0 - (c - p).length() / self.smooth).max(0.0);
+                            let a = eo.area * share(o as usize) * t;
+                            sum += value[o as usize] * a;
+                            w += a;
+                        }
+                    }
+                }
+            }
+            (w > 0.0).then(|| sum / w)
+        };
         let mut corners: Vec<[Vec3; 3]> = self
             .elems
             .iter()
@@ -590,18 +634,22 @@ impl Mesh {
                         for &o in &around[v as usize] {
                             let eo = &self.elems[o as usize];
                             if alike(e, eo) {
-                                let share = if open {
-                                    self.open.get(o as usize).copied().unwrap_or(1.0)
-                                } else {
-                                    1.0
-                                };
-                                sum += value[o as usize] * eo.area * share;
-                                w += eo.area * share;
+                                let s = if open { share(o as usize) } else { 1.0 };
+                                sum += value[o as usize] * eo.area * s;
+                                w += eo.area * s;
                             }
                         }
                         (w > 0.0).then(|| sum / w)
                     };
-                    mean(true).or_else(|| mean(false)).unwrap_or(Vec3::ZERO)
+                    let near = || {
+                        (self.smooth > 0.0)
+                            .then(|| smoothed(e, self.verts[v as usize]))
+                            .flatten()
+                    };
+                    near()
+                        .or_else(|| mean(true))
+                        .or_else(|| mean(false))
+                        .unwrap_or(Vec3::ZERO)
                 })
             })
             .collect();
@@ -973,6 +1021,50 @@ mod tests {
             "without the open shares: {}",
             lowest(&all)
         );
+    }
+
+    /// With `smooth`, a step in the values (hierarchical radiosity's, at a coarse receiver's
+    /// border) becomes a ramp over the radius: on the Cornell box's back wall, 1 left of x = 0
+    /// and 0 right of it, the corners a radius or more away keep their side's value, those at
+    /// the step and half a radius from it lie between (without `smooth` only the step's own
+    /// corners do), and no other plane's value (5 everywhere else) mixes in.
+    #[test]
+    fn smoothed_gouraud_ramps_a_step_within_its_plane() {
+        let f = builtin::load("cornell").unwrap().unwrap().at(0.0);
+        let mut m = Mesh::uniform(&f, 0.05, 1_000_000);
+        m.smooth = 0.2;
+        let back = |e: usize| m.elems[e].normal.z > 0.99 && m.centroid(e).z < -0.99;
+        let value: Vec<Vec3> = (0..m.len())
+            .map(|e| match (back(e), m.centroid(e).x < 0.0) {
+                (true, true) => Vec3::ONE,
+                (true, false) => Vec3::ZERO,
+                _ => Vec3::splat(5.0),
+            })
+            .collect();
+        let corners = m.corner_values(&f, &value);
+        let (mut ramp, mut kept) = (0, 0);
+        for e in (0..m.len()).filter(|&e| back(e)) {
+            for (j, &v) in m.elems[e].v.iter().enumerate() {
+                let (x, c) = (m.verts[v as usize].x, corners[e][j].x);
+                assert!((0.0..=1.0).contains(&c), "corner at x {x}: {c}");
+                if x.abs() > 0.2 + 0.05 {
+                    assert!(
+                        (c - if x < 0.0 { 1.0 } else { 0.0 }).abs() < 1e-6,
+                        "x {x}: {c}"
+                    );
+                    kept += 1;
+                } else if x.abs() < 0.01 {
+                    assert!(c > 0.3 && c < 0.7, "at the step, x {x}: {c}");
+                    ramp += 1;
+                } else if (0.08..0.12).contains(&x.abs()) {
+                    // Half a radius from the step: on the ramp (unsmoothed: 1 or 0).
+                    let side = if x < 0.0 { c } else { 1.0 - c };
+                    assert!(side > 0.6 && side < 0.95, "x {x}: {c}");
+                    ramp += 1;
+                }
+            }
+        }
+        assert!(ramp > 20 && kept > 1000, "{ramp} at the step, {kept} kept");
     }
 
     #[test]
