@@ -587,43 +587,63 @@ impl Mesh {
             a.normal.dot(b.normal) > 0.99
                 && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
         };
-        // Elements by cell of side `smooth`, for the smoothed means.
+        // Elements by cell of side `smooth` and by orientation and material, for the smoothed
+        // means, computed once for each vertex and orientation (in parallel).
+        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
         let cell = |q: Vec3| (q / self.smooth).floor().as_ivec3();
-        let mut grid: HashMap<glam::IVec3, Vec<u32>> = HashMap::new();
+        let facing = |e: &Element| {
+            let n = (e.normal * 64.0).round().as_ivec3();
+            (n, frame.tri_material[e.source as usize])
+        };
+        let mut smoothed: HashMap<(u32, glam::IVec3, u32), Vec3> = HashMap::new();
         if self.smooth > 0.0 {
-            for o in 0..self.elems.len() {
-                grid.entry(cell(self.centroid(o)))
+            use rayon::prelude::*;
+            let centroids: Vec<Vec3> = (0..self.elems.len()).map(|o| self.centroid(o)).collect();
+            let mut grid: HashMap<(glam::IVec3, glam::IVec3, u32), Vec<u32>> = HashMap::new();
+            for (o, e) in self.elems.iter().enumerate() {
+                let (n, m) = facing(e);
+                grid.entry((cell(centroids[o]), n, m))
                     .or_default()
                     .push(o as u32);
             }
-        }
-        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
-        // The tent-weighted mean (radius `smooth`) over the alike elements of `e`'s plane
-        // whose centroids lie within it.
-        let smoothed = |e: &Element, p: Vec3| {
-            let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-            let k = cell(p);
-            for dx in -1..=1 {
-                for dy in -1..=1 {
-                    for dz in -1..=1 {
-                        let Some(list) = grid.get(&(k + glam::IVec3::new(dx, dy, dz))) else {
-                            continue;
-                        };
-                        for &o in list {
-                            let (eo, c) = (&self.elems[o as usize], self.centroid(o as usize));
-                            if !alike(e, eo) || e.normal.dot(c - p).abs() > 1e-4 * self.smooth {
-                                continue;
-                            }
-                            let t = (1.0 - (c - p).length() / self.smooth).max(0.0);
-                            let a = eo.area * share(o as usize) * t;
-                            sum += value[o as usize] * a;
-                            w += a;
-                        }
-                    }
+            // One element for each vertex and orientation: the first that holds it.
+            let mut keys: HashMap<(u32, glam::IVec3, u32), u32> = HashMap::new();
+            for (i, e) in self.elems.iter().enumerate() {
+                let (n, m) = facing(e);
+                for &v in &e.v {
+                    keys.entry((v, n, m)).or_insert(i as u32);
                 }
             }
-            (w > 0.0).then(|| sum / w)
-        };
+            let keys: Vec<((u32, glam::IVec3, u32), u32)> = keys.into_iter().collect();
+            smoothed = keys
+                .par_iter()
+                .filter_map(|&((v, n, m), i)| {
+                    let (e, p) = (&self.elems[i as usize], self.verts[v as usize]);
+                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                    let k = cell(p);
+                    for dx in -1..=1 {
+                        for dy in -1..=1 {
+                            for dz in -1..=1 {
+                                let at = (k + glam::IVec3::new(dx, dy, dz), n, m);
+                                for &o in grid.get(&at).into_iter().flatten() {
+                                    let (eo, c) = (&self.elems[o as usize], centroids[o as usize]);
+                                    if !alike(e, eo)
+                                        || e.normal.dot(c - p).abs() > 1e-4 * self.smooth
+                                    {
+                                        continue;
+                                    }
+                                    let t = (1.0 - (c - p).length() / self.smooth).max(0.0);
+                                    let a = eo.area * share(o as usize) * t;
+                                    sum += value[o as usize] * a;
+                                    w += a;
+                                }
+                            }
+                        }
+                    }
+                    (w > 0.0).then(|| ((v, n, m), sum / w))
+                })
+                .collect();
+        }
         let mut corners: Vec<[Vec3; 3]> = self
             .elems
             .iter()
@@ -642,9 +662,8 @@ impl Mesh {
                         (w > 0.0).then(|| sum / w)
                     };
                     let near = || {
-                        (self.smooth > 0.0)
-                            .then(|| smoothed(e, self.verts[v as usize]))
-                            .flatten()
+                        let (n, m) = facing(e);
+                        smoothed.get(&(v, n, m)).copied()
                     };
                     near()
                         .or_else(|| mean(true))
