@@ -109,10 +109,14 @@ pub fn resolve(
             crate::gpu::Compensate::Auto | crate::gpu::Compensate::Paths(0)
         ))
     .then(|| crate::compensation::near_field_share(frame0, tracer, sampler.clamp));
-    renderer.compensate = match cfg.method.solver() {
-        Some(_) => 0,
-        None => compensate(cfg.quality.compensate, Some(near_field.unwrap_or(0.0))),
-    };
+    // (A count given leaves the share unmeasured; a classical method takes none.)
+    renderer.compensate = compensate(
+        cfg.quality.compensate,
+        cfg.method
+            .solver()
+            .is_none()
+            .then(|| near_field.unwrap_or(0.0)),
+    );
     Ok(Resolved {
         renderer,
         sampler,

@@ -534,9 +534,7 @@ impl Mesh {
             .map(|e| {
                 let n = self.elems[e].normal;
                 let [a, b, c] = self.corners(e);
-                let reach = [(a - b).length(), (b - c).length(), (c - a).length()]
-                    .into_iter()
-                    .fold(0.0f32, f32::max);
+                let reach = self.diameter(e);
                 let open = OPEN_POINTS
                     .iter()
                     .filter(|&&[u, v]| {
@@ -551,17 +549,20 @@ impl Mesh {
                             (tracer.offset(x, n, w), w)
                         };
                         // Inside a solid every ray strikes it from inside first, outside none
-                        // does: one ray tells.
+                        // does: the first ray, cast all the way, tells (and whether it gets
+                        // out); the others stop at `reach`.
                         let (o, w) = ray(0);
-                        let inside = tracer.intersect(o, w, f32::INFINITY).is_some_and(|h| {
+                        let first = tracer.intersect(o, w, f32::INFINITY);
+                        let inside = first.is_some_and(|h| {
                             tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], w)
                         });
-                        let out = (0..OPEN_RAYS)
-                            .filter(|&k| {
-                                let (o, w) = ray(k);
-                                tracer.intersect(o, w, reach).is_none()
-                            })
-                            .count();
+                        let out = usize::from(first.is_none_or(|h| h.t > reach))
+                            + (1..OPEN_RAYS)
+                                .filter(|&k| {
+                                    let (o, w) = ray(k);
+                                    tracer.intersect(o, w, reach).is_none()
+                                })
+                                .count();
                         !inside && out >= 2
                     })
                     .count();
