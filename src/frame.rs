@@ -376,14 +376,17 @@ struct EdgeShading {
     indirect: Vec<[glam::Vec3; 3]>,
 }
 
-/// The mean over `points` (image points of one pixel, `rays x rays` n-rooks points) of the
-/// light a classical method's frame shows there besides emission, and its indirect part: the
-/// solution's indirect light (Gouraud) plus the direct light of the emitter samples `lights`,
-/// traced; the environment where a ray meets nothing. `hit` casts a camera ray onto the
-/// elements. Each emitter sample's visibility is traced at 16 of the points spread over the
-/// pixel (every `rays / 4`-th row and column of the lattice) and, where those disagree or
-/// a point lies on a surface none of them met, at every point: a shadow's edge crossing the
-/// pixel is traced in full, its inside or outside costs 16 rays.
+/// The mean over `points` (image points of one pixel, [`crate::trace::edges::fibonacci_lattice`])
+/// of the light a classical method's frame shows there besides emission, and its indirect
+/// part: the solution's indirect light (Gouraud) plus the direct light of the emitter samples
+/// `lights`, traced; the environment where a ray meets nothing. `hit` casts a camera ray onto
+/// the elements. The direct light is shaded once for each surface in each of the pixel's
+/// 16 x 16 cells (at the first point there; the others on that surface in that cell take its
+/// irradiance), so the points decide what the pixel covers, and more of them cost camera rays
+/// more than shadow rays. Each emitter sample's visibility is traced at the first point of
+/// each of the pixel's 4 x 4 cells and, where those disagree or a point lies on a surface none
+/// of them met, at every shaded point: a shadow's edge crossing the pixel is traced in full,
+/// its inside or outside costs 16 rays.
 #[allow(clippy::too_many_arguments)]
 fn shade_edge(
     points: &[glam::Vec2],
@@ -395,34 +398,39 @@ fn shade_edge(
     cam: crate::scene::camera::Camera,
     (w, h): (u32, u32),
 ) -> [glam::Vec3; 2] {
+    use crate::trace::edges::same_plane;
     use glam::Vec3;
     let els = &edge.reflected.elements;
-    let rays = (points.len() as f64).sqrt().round().max(1.0) as usize;
-    let stride = (rays / 4).max(1);
-    let probe = |k: usize| (k % rays).is_multiple_of(stride) && (k / rays).is_multiple_of(stride);
     struct At {
         x: Vec3,
         n: Vec3,
         albedo: Vec3,
         plane: (Vec3, f32),
     }
-    let mut sum = [Vec3::ZERO; 2];
+    // Each point's cell in a `cells x cells` grid over its pixel.
+    let cell = |p: glam::Vec2, cells: u32| {
+        let f = (p - p.floor()) * cells as f32;
+        let c = |v: f32| (v.max(0.0) as u32).min(cells - 1);
+        c(f.y) * cells + c(f.x)
+    };
+    let scale = cam.position.length().max(1.0);
+    // Per point: the surface it sees, and what it shows besides the direct light (the
+    // environment, or the solution's indirect light) with that indirect part.
+    let mut own = Vec::with_capacity(points.len());
     let mut at = Vec::with_capacity(points.len());
     for &p in points {
         let Some((d, e, b1, b2)) = hit(p) else {
             // The environment toward the pixel's centre, as the direct pass gives it.
-            if let Some(env) = environment {
-                let centre = p.floor() + glam::Vec2::splat(0.5);
-                sum[0] += env.radiance(cam.ray_dir(centre, w, h));
-            }
+            let centre = p.floor() + glam::Vec2::splat(0.5);
+            let sky = environment.map_or(Vec3::ZERO, |env| env.radiance(cam.ray_dir(centre, w, h)));
+            own.push([sky, Vec3::ZERO]);
             at.push(None);
             continue;
         };
         let n = els.normals[e];
         let n = if n.dot(d) > 0.0 { -n } else { n };
         let indirect = radiosity::form_factor::at(&edge.indirect[e], [1.0 - b1 - b2, b1, b2]);
-        sum[0] += indirect;
-        sum[1] += indirect;
+        own.push([indirect, indirect]);
         let x = els.point(e, b1, b2);
         at.push(Some(At {
             x,
@@ -431,22 +439,44 @@ fn shade_edge(
             plane: (n, n.dot(x)),
         }));
     }
+    // The point whose irradiance each point takes: the first on its surface in its cell.
+    // Per cell: (the surface's plane, its first point).
+    type First = ((Vec3, f32), usize);
+    let mut firsts: Vec<Vec<First>> = vec![Vec::new(); 256];
+    let source: Vec<usize> = (0..at.len())
+        .map(|k| {
+            let Some(a) = &at[k] else { return k };
+            let list = &mut firsts[cell(points[k], 16) as usize];
+            match list.iter().find(|f| same_plane(f.0, a.plane, scale)) {
+                Some(f) => f.1,
+                None => {
+                    list.push((a.plane, k));
+                    k
+                }
+            }
+        })
+        .collect();
+    // The probes: the first point of each 4 x 4 cell.
+    let mut probe = vec![false; at.len()];
+    let mut taken = [false; 16];
+    for (k, &p) in points.iter().enumerate() {
+        let c = cell(p, 4) as usize;
+        if !taken[c] {
+            (taken[c], probe[k]) = (true, true);
+        }
+    }
     let probed: Vec<(Vec3, f32)> = (0..at.len())
-        .filter(|&k| probe(k))
+        .filter(|&k| probe[k])
         .filter_map(|k| at[k].as_ref().map(|a| a.plane))
         .collect();
-    let scale = cam.position.length().max(1.0);
     let on_probed: Vec<bool> = at
         .iter()
         .map(|a| {
-            a.as_ref().is_some_and(|a| {
-                probed
-                    .iter()
-                    .any(|&p| crate::trace::edges::same_plane(p, a.plane, scale))
-            })
+            a.as_ref()
+                .is_some_and(|a| probed.iter().any(|&p| same_plane(p, a.plane, scale)))
         })
         .collect();
-    let mut direct = Vec3::ZERO;
+    let mut irradiance = vec![Vec3::ZERO; at.len()];
     // Per point, this sample's visibility where a probe traced it.
     let mut seen: Vec<Option<bool>> = vec![None; at.len()];
     for l in lights {
@@ -455,7 +485,7 @@ fn shade_edge(
         for (k, a) in at.iter().enumerate() {
             seen[k] = None;
             let Some(a) = a else { continue };
-            if !probe(k) {
+            if !probe[k] {
                 continue;
             }
             if let Some((_, y, ny)) = l.irradiance_at(a.x, a.n) {
@@ -470,6 +500,9 @@ fn shade_edge(
         }
         for (k, (a, &on_probed)) in at.iter().zip(&on_probed).enumerate() {
             let Some(a) = a else { continue };
+            if source[k] != k {
+                continue;
+            }
             if let Some((e, y, ny)) = l.irradiance_at(a.x, a.n) {
                 let visible = match (seen[k], shared) {
                     (Some(v), _) => v,
@@ -477,12 +510,19 @@ fn shade_edge(
                     _ => !tracer.occluded(a.x, a.n, y, ny),
                 };
                 if visible {
-                    direct += a.albedo * e;
+                    irradiance[k] += e;
                 }
             }
         }
     }
-    sum[0] += direct / std::f32::consts::PI;
+    let mut sum = [Vec3::ZERO; 2];
+    for (k, a) in at.iter().enumerate() {
+        let direct = a.as_ref().map_or(Vec3::ZERO, |a| {
+            a.albedo * irradiance[source[k]] / std::f32::consts::PI
+        });
+        sum[0] += own[k][0] + direct;
+        sum[1] += own[k][1];
+    }
     sum.map(|v| v / points.len().max(1) as f32)
 }
 

@@ -50,9 +50,9 @@ pub struct Quality {
     pub aa: u32,
     /// Edges box-filtered on the CPU: in pixels at an emitter's edge its emission is the
     /// exact covered area (N x N camera rays find what hides it); with a classical method,
-    /// pixels at silhouettes and creases take the solution's light box-filtered by N x N
-    /// camera rays (0: off, the sub-samples only; the rest of an emitter edge pixel's light
-    /// stays as the sub-samples give it)
+    /// pixels at silhouettes and creases take the solution's light box-filtered by about
+    /// N x N camera rays, a Fibonacci lattice (0: off, the sub-samples only; the rest of an
+    /// emitter edge pixel's light stays as the sub-samples give it)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().edge_rays, allow_hyphen_values = true))]
     pub edge_rays: u32,
     /// Clamping-bias compensation: K short paths a pixel (CPU) add back the light the distance
@@ -93,7 +93,7 @@ impl Default for Quality {
             // from +6.9% of the reference's to +0.9% for +20% of the frame's time (3x3 and 4x4
             // cost 2.2x and 3.1x); 4x4 for a classical method's still solution.
             aa: 0,
-            // 16: an emitter triangle's share of an edge pixel is its projection's exact area
+            // 24: an emitter triangle's share of an edge pixel is its projection's exact area
             // in the pixel (`trace::edges`), the rays deciding only what hides it and what it
             // emits there; a classical method's silhouettes and creases take their light
             // box-filtered by the same rays, each seeing what the surfaces show. On
@@ -101,9 +101,10 @@ impl Default for Quality {
             // 8 took cdf's warped flicker from 0.00356 to 0.00209 and progressive's from
             // 0.00279 to 0.00110 (docs/antialiasing.md); against an 8192-spp reference, 16
             // (with 4x4 sub-samples) takes progressive's own flicker from 0.000207 to 0.000173
-            // at 1.5x its frame's time; instant radiosity's emitter edges cost 1.9 ms at 256x256
-            // (0.7 ms at 8).
-            edge_rays: 16,
+            // at 1.5x its frame's time; 24 (a Fibonacci lattice of 610 rays for the
+            // silhouettes) to 0.000154 against 0.000164 at 16 (233 rays), at 1.25x the frame's
+            // time; instant radiosity's emitter edges cost 5.1 ms at 256x256 (2.3 ms at 16).
+            edge_rays: 24,
             // Only where the scene needs it: 16 paths a pixel take a 256x256 Cornell frame from
             // 0.14 s to 0.35 s (docs/math.md section 4), and no built-in scene needs it.
             compensate: Compensate::Auto,
