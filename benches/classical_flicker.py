@@ -110,6 +110,12 @@ for name, v in rows.items():
     cols = [mmm([x[0] for x in v], 6), mmm([x[1] for x in v], 6)]
     cols += [mmm([x[i] for x in v]) for i in range(2, 6)]
     lines.append(f"| {name} | " + " | ".join(cols) + " |")
+# Each seed's own flicker as a ratio to cdf's (the bound of issue 29 item 3 is 0.10 for each).
+lines += ["", "Own flicker / cdf's at the defaults, each seed:", "",
+          "| run | " + " | ".join(f"seed {s}" for s in seeds) + " |",
+          "| --- |" + " --- |" * len(seeds)]
+for name in METHODS:
+    lines.append(f"| {name} | " + " | ".join(f"{x[2]:.3f}" for x in rows[name]) + " |")
 lines += ["", f"({time.time() - t0:.0f} s)"]
 text = "\n".join(lines)
 print(text)
