@@ -488,3 +488,54 @@ fn every_lamp_of_the_sweep_is_compensated() {
     let (s, _) = share(&cornell);
     assert_eq!((s, auto(s)), (0.0, 0));
 }
+
+/// The 1 mm single-sided row against the 8192-spp reference over 16 seeds (a measurement:
+/// `--ignored`), with the 1 mm double-sided row beside it: the mean bias with its standard
+/// error, so that a bias can be told from the VPLs' seed-to-seed spread.
+#[test]
+#[ignore]
+fn the_one_mm_rows_over_16_seeds() {
+    let seeds: Vec<u64> = (1..=16).collect();
+    println!("| sides | --compensate | mean bias | standard error | relMSE (median) | each seed |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    for double in [false, true] {
+        let scene = common::quads::load(&cornell_with_gap(0.001, double));
+        let r = common::reference_frame(&scene, 32, 8192);
+        for compensate in [Compensate::Auto, Compensate::Paths(0)] {
+            let errors: Vec<_> = seeds
+                .iter()
+                .map(|&seed| {
+                    let g = gpu_frame(
+                        &scene,
+                        32,
+                        irad::vpl::sampler::SamplerKind::Uniform,
+                        seed,
+                        compensate,
+                    );
+                    irad::metrics::frame_error(&g, &r).unwrap()
+                })
+                .collect();
+            let n = errors.len() as f64;
+            let mean = mean_bias(&errors);
+            let var = errors
+                .iter()
+                .map(|e| (e.rel_bias - mean).powi(2))
+                .sum::<f64>()
+                / (n - 1.0);
+            let mut mse: Vec<f64> = errors.iter().map(|e| e.rel_mse).collect();
+            mse.sort_by(f64::total_cmp);
+            let each: Vec<String> = errors
+                .iter()
+                .map(|e| format!("{:+.0}", 100.0 * e.rel_bias))
+                .collect();
+            println!(
+                "| {} | {compensate} | {:+.1}% | {:.1}% | {:.4} | {} |",
+                if double { "double" } else { "single" },
+                100.0 * mean,
+                100.0 * (var / n).sqrt(),
+                mse[mse.len() / 2],
+                each.join(" ")
+            );
+        }
+    }
+}
