@@ -513,24 +513,12 @@ mod tests {
         assert!(e_fix < 1e-5, "{e_fix} vs {e_sub}");
     }
 
-    /// The area of the unit square where `n . p > c` (the square clipped by the half-plane).
+    /// The area of the unit square where `n . p > c`: [`clipped`] of a triangle that holds
+    /// the half-plane's part of the square (its base on the line, 100 wide either way, its
+    /// apex 100 beyond it).
     fn covered(n: glam::DVec2, c: f64) -> f64 {
-        let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)].map(glam::DVec2::from);
-        let mut poly = Vec::new();
-        for (i, &a) in square.iter().enumerate() {
-            let b = square[(i + 1) % 4];
-            let (fa, fb) = (n.dot(a) - c, n.dot(b) - c);
-            if fa > 0.0 {
-                poly.push(a);
-            }
-            if (fa > 0.0) != (fb > 0.0) {
-                poly.push(a + (b - a) * (fa / (fa - fb)));
-            }
-        }
-        let twice: f64 = (0..poly.len())
-            .map(|i| poly[i].perp_dot(poly[(i + 1) % poly.len()]))
-            .sum();
-        0.5 * twice.abs()
+        let (on, along) = (n * c, n.perp() * 100.0);
+        clipped(&[on + along, on - along, on + n * 100.0], glam::DVec2::ZERO).0
     }
 
     /// A straight edge at every angle (0.5 degree steps) and 200 offsets across a pixel: the
