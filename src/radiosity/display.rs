@@ -32,8 +32,7 @@ impl<'a> From<&'a Shaded> for crate::gpu::radiosity::Gouraud<'a> {
 
 impl Shaded {
     pub fn new(frame: &Frame, sol: &Solution, part: Part) -> Shaded {
-        let values = sol.display_values(part);
-        let corners = sol.mesh.corner_values(frame, &values);
+        let corners = sol.corner_values(frame, part);
         let elements = sol.mesh.as_frame(frame);
         let tracer = Tracer::new(&elements);
         Shaded {

@@ -43,34 +43,42 @@ pub fn at(c: &[Vec3; 3], b: [f32; 3]) -> Vec3 {
     c[0] * b[0] + c[1] * b[1] + c[2] * b[2]
 }
 
-/// Clips a polygon to the half-space `n . (p - x) >= 0` (Sutherland-Hodgman). At most 8
-/// vertices in and out (enough for a clipped quadrilateral).
-fn clip(poly: &[Vec3], x: Vec3, n: Vec3, out: &mut Vec<Vec3>) {
-    out.clear();
+/// Clips a polygon to the half-space `n . (p - x) >= 0` (Sutherland-Hodgman) into `out`,
+/// returning the clipped polygon's vertex count. A polygon of `k` vertices clips to at most
+/// `k + 1`; vertices past `out`'s length are dropped (polygons here have at most 4).
+fn clip(poly: &[Vec3], x: Vec3, n: Vec3, out: &mut [Vec3; 8]) -> usize {
+    let mut m = 0;
+    let mut push = |p: Vec3| {
+        if m < out.len() {
+            out[m] = p;
+            m += 1;
+        }
+    };
     let k = poly.len();
     for i in 0..k {
         let (p, q) = (poly[i], poly[(i + 1) % k]);
         let (dp, dq) = (n.dot(p - x), n.dot(q - x));
         if dp >= 0.0 {
-            out.push(p);
+            push(p);
         }
         if (dp >= 0.0) != (dq >= 0.0) {
             let t = dp / (dp - dq);
-            out.push(p + (q - p) * t);
+            push(p + (q - p) * t);
         }
     }
+    m
 }
 
 /// Unoccluded form factor from a differential area at `x` with unit normal `n` to the planar
 /// polygon `poly` (any winding), counting only the part of the polygon above `x`'s plane.
 /// Both sides of the polygon count: callers check that `x` faces the sender's front.
 pub fn point_to_polygon(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
-    let mut clipped = Vec::with_capacity(8);
-    clip(poly, x, n, &mut clipped);
-    if clipped.len() < 3 {
+    let mut buf = [Vec3::ZERO; 8];
+    let k = clip(poly, x, n, &mut buf);
+    if k < 3 {
         return 0.0;
     }
-    let k = clipped.len();
+    let clipped = &buf[..k];
     let mut sum = 0.0f32;
     for i in 0..k {
         let a = clipped[i] - x;
@@ -129,12 +137,26 @@ pub fn between(
     tracer: Option<&Tracer>,
     q: FormFactorAccuracy,
 ) -> (f32, u32) {
+    let (f, _, rays) = between_open(ci, ni, cj, nj, tracer, q);
+    (f, rays)
+}
+
+/// [`between`], and the same estimate without occlusion: (form factor, unoccluded form
+/// factor, rays cast).
+pub fn between_open(
+    ci: &[Vec3; 3],
+    ni: Vec3,
+    cj: &[Vec3; 3],
+    nj: Vec3,
+    tracer: Option<&Tracer>,
+    q: FormFactorAccuracy,
+) -> (f32, f32, u32) {
     if !facing(ci, ni, cj, nj) {
-        return (0.0, 0);
+        return (0.0, 0.0, 0);
     }
     let targets = sample_points(q.rays);
     let pts = sample_points(q.points);
-    let mut sum = 0.0;
+    let (mut sum, mut open) = (0.0, 0.0);
     let mut rays = 0;
     for &b in pts {
         let x = at(ci, b);
@@ -166,8 +188,10 @@ pub fn between(
             }
         };
         sum += f * vis;
+        open += f;
     }
-    (sum / pts.len() as f32, rays)
+    let k = pts.len() as f32;
+    (sum / k, open / k, rays)
 }
 
 #[cfg(test)]

@@ -583,6 +583,11 @@ impl Mesh {
     /// edge (a step there is a line in the image that the pixel grid samples differently in
     /// every frame of a moving camera).
     pub fn corner_values(&self, frame: &Frame, value: &[Vec3]) -> Vec<[Vec3; 3]> {
+        self.corner_values_at(frame, value, self.smooth)
+    }
+
+    /// [`Mesh::corner_values`] with `smooth` in place of [`Mesh::smooth`].
+    pub fn corner_values_at(&self, frame: &Frame, value: &[Vec3], smooth: f32) -> Vec<[Vec3; 3]> {
         let around = self.vertex_elements();
         let alike = |a: &Element, b: &Element| {
             a.normal.dot(b.normal) > 0.99
@@ -591,13 +596,13 @@ impl Mesh {
         // Elements by cell of side `smooth` and by orientation and material, for the smoothed
         // means, computed once for each vertex and orientation (in parallel).
         let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
-        let cell = |q: Vec3| (q / self.smooth).floor().as_ivec3();
+        let cell = |q: Vec3| (q / smooth).floor().as_ivec3();
         let facing = |e: &Element| {
             let n = (e.normal * 64.0).round().as_ivec3();
             (n, frame.tri_material[e.source as usize])
         };
         let mut smoothed: HashMap<(u32, glam::IVec3, u32), Vec3> = HashMap::new();
-        if self.smooth > 0.0 {
+        if smooth > 0.0 {
             use rayon::prelude::*;
             let centroids: Vec<Vec3> = (0..self.elems.len()).map(|o| self.centroid(o)).collect();
             let mut grid: HashMap<(glam::IVec3, glam::IVec3, u32), Vec<u32>> = HashMap::new();
@@ -628,12 +633,10 @@ impl Mesh {
                                 let at = (k + glam::IVec3::new(dx, dy, dz), n, m);
                                 for &o in grid.get(&at).into_iter().flatten() {
                                     let (eo, c) = (&self.elems[o as usize], centroids[o as usize]);
-                                    if !alike(e, eo)
-                                        || e.normal.dot(c - p).abs() > 1e-4 * self.smooth
-                                    {
+                                    if !alike(e, eo) || e.normal.dot(c - p).abs() > 1e-4 * smooth {
                                         continue;
                                     }
-                                    let t = (1.0 - (c - p).length() / self.smooth).max(0.0);
+                                    let t = (1.0 - (c - p).length() / smooth).max(0.0);
                                     let a = eo.area * share(o as usize) * t;
                                     sum += value[o as usize] * a;
                                     w += a;
@@ -673,6 +676,55 @@ impl Mesh {
                 })
             })
             .collect();
+        self.conform(frame, &mut corners, &around);
+        corners
+    }
+
+    /// Per-corner values made one per vertex: each corner takes the area-weighted mean of
+    /// the values that the elements around its vertex, in the same plane direction and of
+    /// the same material, hold there.
+    pub fn shared_corners(
+        &self,
+        frame: &Frame,
+        corners: &[[Vec3; 3]],
+        around: &[Vec<u32>],
+    ) -> Vec<[Vec3; 3]> {
+        let alike = |a: &Element, b: &Element| {
+            a.normal.dot(b.normal) > 0.99
+                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
+        };
+        self.elems
+            .iter()
+            .map(|e| {
+                e.v.map(|v| {
+                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                    for &o in &around[v as usize] {
+                        let eo = &self.elems[o as usize];
+                        if alike(e, eo) {
+                            if let Some(j) = eo.v.iter().position(|&x| x == v) {
+                                sum += corners[o as usize][j] * eo.area;
+                                w += eo.area;
+                            }
+                        }
+                    }
+                    if w > 0.0 {
+                        sum / w
+                    } else {
+                        Vec3::ZERO
+                    }
+                })
+            })
+            .collect()
+    }
+
+    /// Makes corner values continuous across T-vertices: where an element's edge holds
+    /// another element's corner, that corner takes the value the longer edge interpolates
+    /// there, longest edges first. `around`: [`Mesh::vertex_elements`].
+    pub fn conform(&self, frame: &Frame, corners: &mut [[Vec3; 3]], around: &[Vec<u32>]) {
+        let alike = |a: &Element, b: &Element| {
+            a.normal.dot(b.normal) > 0.99
+                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
+        };
         // T-vertices lie at midpoints of longer edges (midpoint splits), of their halves and
         // so on: found by position, the midpoint computed as the split computed it.
         let bits = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
@@ -718,7 +770,6 @@ impl Mesh {
                 }
             }
         }
-        corners
     }
 
     /// The elements as a frame (same camera and materials), for ray casting onto elements:

@@ -156,6 +156,8 @@ pub fn solve(
         emission: le,
         direct,
         ambient: amb,
+        layers: Vec::new(),
+        pointwise: None,
         stats,
     }
 }
