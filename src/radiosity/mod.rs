@@ -117,8 +117,9 @@ pub struct Pointwise {
     pub direct: Vec<[Vec3; 3]>,
 }
 
-/// A part of a solution's reflected radiance that varies on one scale (hierarchical
-/// radiosity's light gathered at one level of its tree), smoothed for display at that scale.
+/// A part of a solution's reflected radiance given per element and shown through Gouraud
+/// values smoothed at a radius of its own (hierarchical radiosity: what its links with
+/// clusters gathered, and the punctual lights' direct light).
 #[derive(Clone, Debug, Default)]
 pub struct Layer {
     /// The display's smoothing radius for this part ([`Mesh::corner_values_at`]).
