@@ -680,9 +680,10 @@ impl Mesh {
         corners
     }
 
-    /// Per-corner values made one per vertex: each corner takes the area-weighted mean of
-    /// the values that the elements around its vertex, in the same plane direction and of
-    /// the same material, hold there.
+    /// Per-corner values made one per vertex: each corner takes the mean of the values that
+    /// the elements around its vertex, in the same plane direction and of the same material,
+    /// hold there, weighted by their area and open share as in [`Mesh::corner_values`] (a
+    /// covered element's corners, dark, would ring its cover's outline).
     pub fn shared_corners(
         &self,
         frame: &Frame,
@@ -693,25 +694,28 @@ impl Mesh {
             a.normal.dot(b.normal) > 0.99
                 && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
         };
+        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
         self.elems
             .iter()
-            .map(|e| {
-                e.v.map(|v| {
-                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-                    for &o in &around[v as usize] {
-                        let eo = &self.elems[o as usize];
-                        if alike(e, eo) {
-                            if let Some(j) = eo.v.iter().position(|&x| x == v) {
-                                sum += corners[o as usize][j] * eo.area;
-                                w += eo.area;
+            .enumerate()
+            .map(|(i, e)| {
+                [0, 1, 2].map(|k| {
+                    let v = e.v[k];
+                    let mean = |open: bool| {
+                        let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                        for &o in &around[v as usize] {
+                            let eo = &self.elems[o as usize];
+                            if alike(e, eo) {
+                                if let Some(j) = eo.v.iter().position(|&x| x == v) {
+                                    let a = eo.area * if open { share(o as usize) } else { 1.0 };
+                                    sum += corners[o as usize][j] * a;
+                                    w += a;
+                                }
                             }
                         }
-                    }
-                    if w > 0.0 {
-                        sum / w
-                    } else {
-                        Vec3::ZERO
-                    }
+                        (w > 0.0).then(|| sum / w)
+                    };
+                    mean(true).or_else(|| mean(false)).unwrap_or(corners[i][k])
                 })
             })
             .collect()
