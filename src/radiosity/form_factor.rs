@@ -127,6 +127,32 @@ pub fn facing(ci: &[Vec3; 3], ni: Vec3, cj: &[Vec3; 3], nj: Vec3) -> bool {
     cj.iter().any(|&p| ni.dot(p - ci[0]) > eps) && ci.iter().any(|&p| nj.dot(p - cj[0]) > eps)
 }
 
+/// The share of rays from `x` (normal `ni`) to the points `targets` (barycentrics) of
+/// triangle `cj` that arrive unoccluded, counting only the points above `x`'s plane (1 when
+/// there are none), and the rays cast.
+pub fn visibility(
+    x: Vec3,
+    ni: Vec3,
+    cj: &[Vec3; 3],
+    nj: Vec3,
+    tr: &Tracer,
+    targets: &[[f32; 3]],
+) -> (f32, u32) {
+    let (mut seen, mut tried) = (0, 0);
+    for &t in targets {
+        let y = at(cj, t);
+        if ni.dot(y - x) > 0.0 {
+            tried += 1;
+            seen += u32::from(!tr.occluded(x, ni, y, nj));
+        }
+    }
+    if tried == 0 {
+        (1.0, 0)
+    } else {
+        (seen as f32 / tried as f32, tried)
+    }
+}
+
 /// Form factor from triangle `ci` (normal `ni`) to the front of triangle `cj`, and the
 /// number of visibility rays cast.
 pub fn between(
@@ -170,21 +196,9 @@ pub fn between_open(
         let vis = match tracer {
             None => 1.0,
             Some(tr) => {
-                // Only the sender's points above the receiver's plane can be seen.
-                let (mut seen, mut tried) = (0, 0);
-                for &t in targets {
-                    let y = at(cj, t);
-                    if ni.dot(y - x) > 0.0 {
-                        tried += 1;
-                        seen += u32::from(!tr.occluded(x, ni, y, nj));
-                    }
-                }
+                let (v, tried) = visibility(x, ni, cj, nj, tr, targets);
                 rays += tried;
-                if tried == 0 {
-                    1.0
-                } else {
-                    seen as f32 / tried as f32
-                }
+                v
             }
         };
         sum += f * vis;
