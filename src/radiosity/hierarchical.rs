@@ -33,6 +33,10 @@
 //! with the first solution's radiance (BF refinement). The punctual lights' direct light is a
 //! source term of every leaf beside its emission (computed at each node once links are built,
 //! as in [`super::punctual_irradiance`]); light it sends along links is indirect.
+//!
+//! The display (`Tree::display`) evaluates the surface links at the leaves' corners (point
+//! form factors times the links' visibility, traced again from the corner where a link is
+//! seen in part) instead of showing each link's mean over its receiver.
 
 use super::form_factor::{self, point_to_polygon, FormFactorAccuracy};
 use super::mesh::Mesh;
