@@ -71,8 +71,10 @@ fn clip(poly: &[Vec3], x: Vec3, n: Vec3, out: &mut [Vec3; 8]) -> usize {
 
 /// Unoccluded form factor from a differential area at `x` with unit normal `n` to the planar
 /// polygon `poly` (any winding), counting only the part of the polygon above `x`'s plane.
-/// Both sides of the polygon count: callers check that `x` faces the sender's front.
+/// Both sides of the polygon count: callers check that `x` faces the sender's front. At most
+/// 7 vertices (the clipped polygon has one more; callers pass triangles and quadrilaterals).
 pub fn point_to_polygon(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
+    debug_assert!(poly.len() <= 7, "{} vertices", poly.len());
     let mut buf = [Vec3::ZERO; 8];
     let k = clip(poly, x, n, &mut buf);
     if k < 3 {
