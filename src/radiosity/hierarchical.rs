@@ -1198,12 +1198,9 @@ pub fn solve(
     let pointwise = Some(super::Pointwise {
         reflected: pr,
         direct: pd,
+        constant_reflected: cr.iter().zip(&amb).map(|(&c, &a)| c + a).collect(),
+        constant_direct: cd,
     });
-    let layers = vec![super::Layer {
-        smooth: mesh.smooth,
-        reflected: cr.iter().zip(&amb).map(|(&c, &a)| c + a).collect(),
-        direct: cd,
-    }];
     stats.seconds = start.elapsed().as_secs_f64();
     Solution {
         mesh,
@@ -1211,7 +1208,6 @@ pub fn solve(
         emission,
         direct,
         ambient: amb,
-        layers,
         pointwise,
         stats,
     }
@@ -1222,18 +1218,23 @@ mod tests {
     use super::*;
     use crate::scene::builtin;
 
+    /// The tests' settings: top patches of 1 (the furnace's faces are 2 wide), smallest 0.2.
+    fn settings(eps: f32, points: usize) -> HierarchicalSettings {
+        HierarchicalSettings {
+            top_size: 1.0,
+            min_size: 0.2,
+            eps,
+            tolerance: 1e-4,
+            quality: FormFactorAccuracy { points, rays: 4 },
+            seed: 1,
+        }
+    }
+
     #[test]
     fn white_furnace_is_two() {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
-        let p = HierarchicalSettings {
-            top_size: 1.0,
-            min_size: 0.2,
-            eps: 0.01,
-            tolerance: 1e-4,
-            quality: FormFactorAccuracy { points: 7, rays: 4 },
-            seed: 1,
-        };
+        let p = settings(0.01, 7);
         let sol = solve(&f, &tr, &p, &|_| {});
         assert!(sol.stats.links > 0 && !sol.mesh.is_empty());
         let worst = sol
@@ -1261,14 +1262,7 @@ mod tests {
     fn furnace_display_is_one_at_every_corner() {
         let f = builtin::load("furnace").unwrap().unwrap().at(0.0);
         let tr = Tracer::new(&f);
-        let p = HierarchicalSettings {
-            top_size: 1.0,
-            min_size: 0.2,
-            eps: 0.01,
-            tolerance: 1e-4,
-            quality: FormFactorAccuracy { points: 7, rays: 4 },
-            seed: 1,
-        };
+        let p = settings(0.01, 7);
         let sol = solve(&f, &tr, &p, &|_| {});
         let worst = |c: &[[Vec3; 3]]| {
             c.iter()
@@ -1323,14 +1317,7 @@ mod tests {
             f.emitter_of_tri.push(u32::MAX);
         }
         let tr = Tracer::new(&f);
-        let p = HierarchicalSettings {
-            top_size: 1.0,
-            min_size: 0.2,
-            eps: 0.05,
-            tolerance: 1e-4,
-            quality: FormFactorAccuracy { points: 7, rays: 4 },
-            seed: 1,
-        };
+        let p = settings(0.05, 7);
         let sol = solve(&f, &tr, &p, &|_| {});
         let shown = sol.corner_values(&f, super::super::Part::Reflected);
         // The floor's corners beside the plate, away from its edge and the walls.
@@ -1388,14 +1375,7 @@ mod tests {
         let f = fine_furnace(5);
         assert_eq!(f.tris.len(), 12 * 1024);
         let tr = Tracer::new(&f);
-        let p = HierarchicalSettings {
-            top_size: 1.0,
-            min_size: 0.2,
-            eps: 0.01,
-            tolerance: 1e-4,
-            quality: FormFactorAccuracy { points: 4, rays: 4 },
-            seed: 1,
-        };
+        let p = settings(0.01, 4);
         let t = std::time::Instant::now();
         let sol = solve(&f, &tr, &p, &|_| {});
         let a: f32 = sol.mesh.elems.iter().map(|e| e.area).sum();

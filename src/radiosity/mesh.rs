@@ -68,6 +68,13 @@ fn key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
 }
 
+/// Whether two elements' values may be averaged at a vertex they share: the same plane
+/// direction and triangles of the same material (so colours do not bleed around corners).
+fn alike(frame: &Frame, a: &Element, b: &Element) -> bool {
+    a.normal.dot(b.normal) > 0.99
+        && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
+}
+
 impl Mesh {
     /// The frame's triangles as elements, vertices welded where positions are equal.
     /// Degenerate triangles (zero area) get no element.
@@ -583,73 +590,98 @@ impl Mesh {
     /// edge (a step there is a line in the image that the pixel grid samples differently in
     /// every frame of a moving camera).
     pub fn corner_values(&self, frame: &Frame, value: &[Vec3]) -> Vec<[Vec3; 3]> {
-        self.corner_values_at(frame, value, self.smooth)
+        let around = self.vertex_elements();
+        let mut corners = self.gouraud(frame, value, &around);
+        self.conform(frame, &mut corners, &around);
+        corners
     }
 
-    /// [`Mesh::corner_values`] with `smooth` in place of [`Mesh::smooth`].
-    pub fn corner_values_at(&self, frame: &Frame, value: &[Vec3], smooth: f32) -> Vec<[Vec3; 3]> {
-        let around = self.vertex_elements();
-        let alike = |a: &Element, b: &Element| {
-            a.normal.dot(b.normal) > 0.99
-                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
-        };
+    /// [`Mesh::corner_values`] before [`Mesh::conform`]: the (smoothed) means at each corner.
+    /// `around`: [`Mesh::vertex_elements`].
+    pub fn gouraud(&self, frame: &Frame, value: &[Vec3], around: &[Vec<u32>]) -> Vec<[Vec3; 3]> {
+        use rayon::prelude::*;
+        let broadcast: Vec<[Vec3; 3]> = value.iter().map(|&v| [v; 3]).collect();
+        let mut corners = self.shared_corners(frame, &broadcast, around);
+        if self.smooth <= 0.0 {
+            return corners;
+        }
         // Elements by cell of side `smooth` and by orientation and material, for the smoothed
         // means, computed once for each vertex and orientation (in parallel).
         let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
-        let cell = |q: Vec3| (q / smooth).floor().as_ivec3();
+        let cell = |q: Vec3| (q / self.smooth).floor().as_ivec3();
         let facing = |e: &Element| {
             let n = (e.normal * 64.0).round().as_ivec3();
             (n, frame.tri_material[e.source as usize])
         };
-        let mut smoothed: HashMap<(u32, glam::IVec3, u32), Vec3> = HashMap::new();
-        if smooth > 0.0 {
-            use rayon::prelude::*;
-            let centroids: Vec<Vec3> = (0..self.elems.len()).map(|o| self.centroid(o)).collect();
-            let mut grid: HashMap<(glam::IVec3, glam::IVec3, u32), Vec<u32>> = HashMap::new();
-            for (o, e) in self.elems.iter().enumerate() {
-                let (n, m) = facing(e);
-                grid.entry((cell(centroids[o]), n, m))
-                    .or_default()
-                    .push(o as u32);
+        let centroids: Vec<Vec3> = (0..self.elems.len()).map(|o| self.centroid(o)).collect();
+        let mut grid: HashMap<(glam::IVec3, glam::IVec3, u32), Vec<u32>> = HashMap::new();
+        for (o, e) in self.elems.iter().enumerate() {
+            let (n, m) = facing(e);
+            grid.entry((cell(centroids[o]), n, m))
+                .or_default()
+                .push(o as u32);
+        }
+        // One element for each vertex and orientation: the first that holds it.
+        let mut keys: HashMap<(u32, glam::IVec3, u32), u32> = HashMap::new();
+        for (i, e) in self.elems.iter().enumerate() {
+            let (n, m) = facing(e);
+            for &v in &e.v {
+                keys.entry((v, n, m)).or_insert(i as u32);
             }
-            // One element for each vertex and orientation: the first that holds it.
-            let mut keys: HashMap<(u32, glam::IVec3, u32), u32> = HashMap::new();
-            for (i, e) in self.elems.iter().enumerate() {
-                let (n, m) = facing(e);
-                for &v in &e.v {
-                    keys.entry((v, n, m)).or_insert(i as u32);
-                }
-            }
-            let keys: Vec<((u32, glam::IVec3, u32), u32)> = keys.into_iter().collect();
-            smoothed = keys
-                .par_iter()
-                .filter_map(|&((v, n, m), i)| {
-                    let (e, p) = (&self.elems[i as usize], self.verts[v as usize]);
-                    let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-                    let k = cell(p);
-                    for dx in -1..=1 {
-                        for dy in -1..=1 {
-                            for dz in -1..=1 {
-                                let at = (k + glam::IVec3::new(dx, dy, dz), n, m);
-                                for &o in grid.get(&at).into_iter().flatten() {
-                                    let (eo, c) = (&self.elems[o as usize], centroids[o as usize]);
-                                    if !alike(e, eo) || e.normal.dot(c - p).abs() > 1e-4 * smooth {
-                                        continue;
-                                    }
-                                    let t = (1.0 - (c - p).length() / smooth).max(0.0);
-                                    let a = eo.area * share(o as usize) * t;
-                                    sum += value[o as usize] * a;
-                                    w += a;
+        }
+        let keys: Vec<((u32, glam::IVec3, u32), u32)> = keys.into_iter().collect();
+        let smoothed: HashMap<(u32, glam::IVec3, u32), Vec3> = keys
+            .par_iter()
+            .filter_map(|&((v, n, m), i)| {
+                let (e, p) = (&self.elems[i as usize], self.verts[v as usize]);
+                let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
+                let k = cell(p);
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            let at = (k + glam::IVec3::new(dx, dy, dz), n, m);
+                            for &o in grid.get(&at).into_iter().flatten() {
+                                let (eo, c) = (&self.elems[o as usize], centroids[o as usize]);
+                                if !alike(frame, e, eo)
+                                    || e.normal.dot(c - p).abs() > 1e-4 * self.smooth
+                                {
+                                    continue;
                                 }
+                                let t = (1.0 - (c - p).length() / self.smooth).max(0.0);
+                                let a = eo.area * share(o as usize) * t;
+                                sum += value[o as usize] * a;
+                                w += a;
                             }
                         }
                     }
-                    (w > 0.0).then(|| ((v, n, m), sum / w))
-                })
-                .collect();
+                }
+                (w > 0.0).then(|| ((v, n, m), sum / w))
+            })
+            .collect();
+        for (e, c) in self.elems.iter().zip(corners.iter_mut()) {
+            let (n, m) = facing(e);
+            for (v, c) in e.v.iter().zip(c.iter_mut()) {
+                if let Some(&x) = smoothed.get(&(*v, n, m)) {
+                    *c = x;
+                }
+            }
         }
-        let mut corners: Vec<[Vec3; 3]> = self
-            .elems
+        corners
+    }
+
+    /// Per-corner values made one per vertex: each corner takes the mean of the values that
+    /// the elements around its vertex, in the same plane direction and of the same material
+    /// ([`alike`]), hold there, weighted by their area and by their open share ([`Mesh::open`];
+    /// all of them where none is open). A covered element's corners, dark, would otherwise ring
+    /// its cover's outline. `around`: [`Mesh::vertex_elements`].
+    pub fn shared_corners(
+        &self,
+        frame: &Frame,
+        corners: &[[Vec3; 3]],
+        around: &[Vec<u32>],
+    ) -> Vec<[Vec3; 3]> {
+        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
+        self.elems
             .iter()
             .map(|e| {
                 e.v.map(|v| {
@@ -657,65 +689,17 @@ impl Mesh {
                         let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
                         for &o in &around[v as usize] {
                             let eo = &self.elems[o as usize];
-                            if alike(e, eo) {
-                                let s = if open { share(o as usize) } else { 1.0 };
-                                sum += value[o as usize] * eo.area * s;
-                                w += eo.area * s;
-                            }
-                        }
-                        (w > 0.0).then(|| sum / w)
-                    };
-                    let near = || {
-                        let (n, m) = facing(e);
-                        smoothed.get(&(v, n, m)).copied()
-                    };
-                    near()
-                        .or_else(|| mean(true))
-                        .or_else(|| mean(false))
-                        .unwrap_or(Vec3::ZERO)
-                })
-            })
-            .collect();
-        self.conform(frame, &mut corners, &around);
-        corners
-    }
-
-    /// Per-corner values made one per vertex: each corner takes the mean of the values that
-    /// the elements around its vertex, in the same plane direction and of the same material,
-    /// hold there, weighted by their area and open share as in [`Mesh::corner_values`] (a
-    /// covered element's corners, dark, would ring its cover's outline).
-    pub fn shared_corners(
-        &self,
-        frame: &Frame,
-        corners: &[[Vec3; 3]],
-        around: &[Vec<u32>],
-    ) -> Vec<[Vec3; 3]> {
-        let alike = |a: &Element, b: &Element| {
-            a.normal.dot(b.normal) > 0.99
-                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
-        };
-        let share = |o: usize| self.open.get(o).copied().unwrap_or(1.0);
-        self.elems
-            .iter()
-            .enumerate()
-            .map(|(i, e)| {
-                [0, 1, 2].map(|k| {
-                    let v = e.v[k];
-                    let mean = |open: bool| {
-                        let (mut sum, mut w) = (Vec3::ZERO, 0.0f32);
-                        for &o in &around[v as usize] {
-                            let eo = &self.elems[o as usize];
-                            if alike(e, eo) {
+                            if alike(frame, e, eo) {
                                 if let Some(j) = eo.v.iter().position(|&x| x == v) {
-                                    let a = eo.area * if open { share(o as usize) } else { 1.0 };
-                                    sum += corners[o as usize][j] * a;
-                                    w += a;
+                                    let s = if open { share(o as usize) } else { 1.0 };
+                                    sum += corners[o as usize][j] * eo.area * s;
+                                    w += eo.area * s;
                                 }
                             }
                         }
                         (w > 0.0).then(|| sum / w)
                     };
-                    mean(true).or_else(|| mean(false)).unwrap_or(corners[i][k])
+                    mean(true).or_else(|| mean(false)).unwrap_or(Vec3::ZERO)
                 })
             })
             .collect()
@@ -725,10 +709,6 @@ impl Mesh {
     /// another element's corner, that corner takes the value the longer edge interpolates
     /// there, longest edges first. `around`: [`Mesh::vertex_elements`].
     pub fn conform(&self, frame: &Frame, corners: &mut [[Vec3; 3]], around: &[Vec<u32>]) {
-        let alike = |a: &Element, b: &Element| {
-            a.normal.dot(b.normal) > 0.99
-                && frame.tri_material[a.source as usize] == frame.tri_material[b.source as usize]
-        };
         // T-vertices lie at midpoints of longer edges (midpoint splits), of their halves and
         // so on: found by position, the midpoint computed as the split computed it.
         let bits = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
@@ -763,7 +743,7 @@ impl Mesh {
                     let cm = (ca + cb) * 0.5;
                     for &o in &around[m as usize] {
                         let eo = &self.elems[o as usize];
-                        if o != e && alike(el, eo) {
+                        if o != e && alike(frame, el, eo) {
                             if let Some(j) = eo.v.iter().position(|&v| v == m) {
                                 corners[o as usize][j] = cm;
                             }

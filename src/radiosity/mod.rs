@@ -102,31 +102,23 @@ pub struct Solution {
     /// Radiance still to be distributed, estimated (Cohen et al. 1988's ambient term):
     /// `rho_i * ambient` with ambient the area-mean unshot radiance over (1 - mean albedo).
     pub ambient: Vec<Vec3>,
-    /// Parts of the reflected radiance shown each at a smoothing radius of its own
-    /// ([`Solution::corner_values`]).
-    pub layers: Vec<Layer>,
-    /// Reflected radiance evaluated at each element's corners (added to the layers').
+    /// Reflected radiance evaluated at each element's corners, shown in place of
+    /// [`Solution::display_values`]' Gouraud interpolation (hierarchical radiosity).
     pub pointwise: Option<Pointwise>,
     pub stats: Stats,
 }
 
-/// Reflected radiance at each element's corners, and the share of it that is direct light.
+/// A solution's reflected radiance as [`Solution::corner_values`] shows it: values at each
+/// element's corners plus per-element values shown through [`Mesh::gouraud`], each with the
+/// share of it that is direct light.
 #[derive(Clone, Debug, Default)]
 pub struct Pointwise {
     pub reflected: Vec<[Vec3; 3]>,
     pub direct: Vec<[Vec3; 3]>,
-}
-
-/// A part of a solution's reflected radiance given per element and shown through Gouraud
-/// values smoothed at a radius of its own (hierarchical radiosity: what its links with
-/// clusters gathered, and the punctual lights' direct light).
-#[derive(Clone, Debug, Default)]
-pub struct Layer {
-    /// The display's smoothing radius for this part ([`Mesh::corner_values_at`]).
-    pub smooth: f32,
-    /// Per element: reflected radiance, and the share of it that is direct light.
-    pub reflected: Vec<Vec3>,
-    pub direct: Vec<Vec3>,
+    /// Per element (hierarchical radiosity: what its links with clusters gathered, the
+    /// punctual lights' direct light and the ambient term).
+    pub constant_reflected: Vec<Vec3>,
+    pub constant_direct: Vec<Vec3>,
 }
 
 /// Which light a displayed solution carries.
@@ -153,42 +145,38 @@ impl Solution {
     }
 
     /// Gouraud values at each element's corners of the reflected radiance to display
-    /// (emission excluded). Without [`Solution::layers`] and [`Solution::pointwise`]:
-    /// [`Solution::display_values`] interpolated at [`Mesh::smooth`]; with them, each layer at
-    /// its own radius plus the pointwise values, made continuous across T-vertices.
+    /// (emission excluded). Without [`Solution::pointwise`]: [`Solution::display_values`]
+    /// interpolated ([`Mesh::corner_values`]); with it, its corner values made one a vertex
+    /// ([`Mesh::shared_corners`]) plus its per-element values' Gouraud interpolation, made
+    /// continuous across T-vertices together.
     pub fn corner_values(&self, frame: &Frame, part: Part) -> Vec<[Vec3; 3]> {
-        if self.layers.is_empty() && self.pointwise.is_none() {
+        let Some(p) = &self.pointwise else {
             return self.mesh.corner_values(frame, &self.display_values(part));
-        }
+        };
         let pick = |r: Vec3, d: Vec3| match part {
             Part::Reflected => r,
             Part::Indirect => r - d,
         };
         let around = self.mesh.vertex_elements();
-        let mut out = match &self.pointwise {
-            Some(p) => {
-                let v: Vec<[Vec3; 3]> = p
-                    .reflected
-                    .iter()
-                    .zip(&p.direct)
-                    .map(|(r, d)| [0, 1, 2].map(|k| pick(r[k], d[k])))
-                    .collect();
-                self.mesh.shared_corners(frame, &v, &around)
-            }
-            None => vec![[Vec3::ZERO; 3]; self.mesh.len()],
-        };
-        for l in &self.layers {
-            let v: Vec<Vec3> = l
-                .reflected
-                .iter()
-                .zip(&l.direct)
-                .map(|(&r, &d)| pick(r, d))
-                .collect();
-            let c = self.mesh.corner_values_at(frame, &v, l.smooth);
-            for (o, c) in out.iter_mut().zip(c) {
-                for k in 0..3 {
-                    o[k] += c[k];
-                }
+        let at: Vec<[Vec3; 3]> = p
+            .reflected
+            .iter()
+            .zip(&p.direct)
+            .map(|(r, d)| [0, 1, 2].map(|k| pick(r[k], d[k])))
+            .collect();
+        let mut out = self.mesh.shared_corners(frame, &at, &around);
+        let constant: Vec<Vec3> = p
+            .constant_reflected
+            .iter()
+            .zip(&p.constant_direct)
+            .map(|(&r, &d)| pick(r, d))
+            .collect();
+        for (o, c) in out
+            .iter_mut()
+            .zip(self.mesh.gouraud(frame, &constant, &around))
+        {
+            for k in 0..3 {
+                o[k] += c[k];
             }
         }
         self.mesh.conform(frame, &mut out, &around);

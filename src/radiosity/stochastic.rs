@@ -154,7 +154,6 @@ pub fn solve(
         emission: le,
         direct,
         ambient: amb,
-        layers: Vec::new(),
         pointwise: None,
         stats,
     }
