@@ -104,6 +104,7 @@ fn bench(c: &mut Criterion) {
         height: 32,
         spp: 4,
         seed: 1,
+        ..Default::default()
     };
     let mut g = c.benchmark_group("reference");
     g.throughput(Throughput::Elements(32 * 32 * 4));

@@ -46,6 +46,7 @@ fn main() -> anyhow::Result<()> {
                 height: size,
                 spp,
                 seed: 1,
+                ..Default::default()
             },
             &|| {},
         );

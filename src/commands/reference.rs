@@ -37,6 +37,7 @@ pub fn params(seq: &config::Sequence, spp: u32) -> crate::reference::ReferenceSe
         height: seq.size.height,
         spp,
         seed: seq.seed,
+        ..Default::default()
     }
 }
 

@@ -264,6 +264,7 @@ impl Reference {
             height: self.sequence.size.height,
             spp: self.spp,
             seed: self.sequence.seed,
+            ..Default::default()
         }
     }
 }

@@ -71,6 +71,7 @@ pub fn reference_frame(scene: &irad::scene::Scene, size: u32, spp: u32) -> Hdr {
         height: size,
         spp,
         seed: 1,
+        ..Default::default()
     };
     irad::reference::render(&f, &t, &s, &|| {})
 }

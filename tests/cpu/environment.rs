@@ -32,6 +32,7 @@ fn reference_mean(scene: &Scene, spp: u32) -> Vec3 {
         height: 16,
         spp,
         seed: 3,
+        ..Default::default()
     };
     irad::reference::render(&f, &t, &s, &|| {}).mean()
 }

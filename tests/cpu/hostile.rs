@@ -60,6 +60,7 @@ fn an_emitter_the_emitter_list_misses_does_not_panic_the_reference() {
         height: 16,
         spp: 16,
         seed: 3,
+        ..Default::default()
     };
     let img = reference::render(&f, &tracer, &s, &|| {});
     let bad = img.data.iter().filter(|p| !p.is_finite()).count();

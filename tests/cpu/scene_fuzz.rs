@@ -379,6 +379,7 @@ fn check(bytes: Vec<u8>, allow: bool) -> Result<bool, String> {
                 height: 4,
                 spp: 2,
                 seed: 1,
+                ..Default::default()
             };
             let img = irad::reference::render(&f, &tracer, &s, &|| {});
             if !img.data.iter().all(|p| p.is_finite()) {

@@ -62,6 +62,7 @@ fn compensation_gives_back_the_light_the_clamp_takes_from_corners() {
         height: SIZE,
         spp: 2048,
         seed: 5,
+        ..Default::default()
     };
     let reference = irad::reference::render(&frame, &tracer, &params, &|| {});
     let plain = render(clamp, 0);

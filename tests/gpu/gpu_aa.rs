@@ -262,6 +262,7 @@ fn cornell_mean_luminance_matches_the_path_tracer_with_the_light_in_view() {
         height: size,
         spp: 64,
         seed: 11,
+        ..Default::default()
     };
     let reference = irad::reference::render(&frame, &tracer, &params, &|| {});
     let mean =

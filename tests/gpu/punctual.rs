@@ -590,6 +590,7 @@ fn gpu_agrees_with_the_reference_on_punctual_lights() {
             height: SIZE,
             spp: 1024,
             seed: 3,
+            ..Default::default()
         },
         &|| {},
     );

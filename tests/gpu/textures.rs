@@ -658,6 +658,7 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
             height: h,
             spp: 1024,
             seed: 3,
+            ..Default::default()
         },
         &|| {},
     );
