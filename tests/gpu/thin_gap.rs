@@ -539,3 +539,79 @@ fn the_one_mm_rows_over_16_seeds() {
         }
     }
 }
+
+/// A reference of `scene` (32 x 32, `spp` samples a pixel, seed `seed`) whose roulette is
+/// capped from bounce `rr_cap_depth` on (`ReferenceSettings::rr_cap_depth`).
+fn reference_capped_from(
+    scene: &irad::scene::Scene,
+    spp: u32,
+    seed: u64,
+    rr_cap_depth: u32,
+) -> irad::image::Hdr {
+    let f = scene.at(0.0);
+    let t = irad::trace::Tracer::new(&f);
+    let s = irad::reference::ReferenceSettings {
+        width: 32,
+        height: 32,
+        spp,
+        seed,
+        rr_cap_depth,
+    };
+    irad::reference::render(&f, &t, &s, &|| {})
+}
+
+/// The 1 cm and 1 mm rows against references that carry the gap's light (a measurement:
+/// `--ignored`; docs/math.md, "Light that cannot get out"). With roulette capped at 0.95 from
+/// bounce 3 (the default, as Mitsuba 3), the light that leaves a 1 cm gap after its median 35
+/// bounces arrives on a few paths weighted up to thousands-fold; capped from bounce 256 it
+/// arrives at weight 1 (97% of it leaves within 256 bounces, `benches/gap_escape.py`). Prints
+/// each reference's own noise (relMSE between two seeds, 8192 spp each, both caps), and the
+/// GPU frames of seeds 1-4 against the mean of four references capped from 256 (32768 spp).
+#[test]
+#[ignore]
+fn the_wide_gaps_against_references_that_carry_the_gaps_light() {
+    println!("| gap | sides | reference noise, cap from 3 | from 256 | mean: from 3, from 256 | GPU vs 4 x 8192 spp from 256: relMSE | bias |");
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    for gap in [0.01, 0.001] {
+        for double in [true, false] {
+            let scene = common::quads::load(&cornell_with_gap(gap, double));
+            let early: Vec<_> = (1..=2)
+                .map(|s| reference_capped_from(&scene, 8192, s, 3))
+                .collect();
+            let late: Vec<_> = (1..=4)
+                .map(|s| reference_capped_from(&scene, 8192, s, 256))
+                .collect();
+            let noise = |r: &[irad::image::Hdr]| irad::metrics::frame_error(&r[0], &r[1]).unwrap();
+            let mut judge = late[0].clone();
+            for (px, i) in judge.data.iter_mut().enumerate() {
+                *i = late.iter().map(|r| r.data[px]).sum::<glam::Vec3>() / late.len() as f32;
+            }
+            let errors: Vec<_> = (1..=4)
+                .map(|seed| {
+                    let g = gpu_frame(
+                        &scene,
+                        32,
+                        irad::vpl::sampler::SamplerKind::Uniform,
+                        seed,
+                        Compensate::Auto,
+                    );
+                    irad::metrics::frame_error(&g, &judge).unwrap()
+                })
+                .collect();
+            let each = |f: &dyn Fn(&irad::metrics::FrameError) -> String| {
+                errors.iter().map(f).collect::<Vec<_>>().join(", ")
+            };
+            println!(
+                "| {} mm | {} | {:.3} | {:.3} | {:.3}, {:.3} | {} | {} |",
+                gap * 1e3,
+                if double { "double" } else { "single" },
+                noise(&early).rel_mse,
+                noise(&late).rel_mse,
+                (early[0].mean() + early[1].mean()).element_sum() / 6.0,
+                judge.mean().element_sum() / 3.0,
+                each(&|e| format!("{:.3}", e.rel_mse)),
+                each(&|e| format!("{:+.1}%", 100.0 * e.rel_bias)),
+            );
+        }
+    }
+}
