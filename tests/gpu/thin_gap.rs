@@ -566,12 +566,13 @@ fn reference_capped_from(
 /// bounces arrives on a few paths weighted up to thousands-fold; capped from bounce 256 it
 /// arrives at weight 1 (97% of it leaves within 256 bounces, `benches/gap_escape.py`). Prints
 /// each reference's own noise (relMSE between two seeds, 8192 spp each, both caps), and the
-/// GPU frames of seeds 1-4 against the mean of four references capped from 256 (32768 spp).
+/// GPU frames of seeds 1-4 (`uniform`, as the sweep, and `mh`, the default) against the mean
+/// of four references capped from 256 (32768 spp).
 #[test]
 #[ignore]
 fn the_wide_gaps_against_references_that_carry_the_gaps_light() {
-    println!("| gap | sides | reference noise, cap from 3 | from 256 | mean: from 3, from 256 | GPU vs 4 x 8192 spp from 256: relMSE | bias |");
-    println!("| --- | --- | --- | --- | --- | --- | --- |");
+    println!("| gap | sides | reference noise, cap from 3 | from 256 | mean: from 3, from 256 | sampler | GPU vs 4 x 8192 spp from 256: relMSE | bias |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
     for gap in [0.01, 0.001] {
         for double in [true, false] {
             let scene = common::quads::load(&cornell_with_gap(gap, double));
@@ -586,32 +587,31 @@ fn the_wide_gaps_against_references_that_carry_the_gaps_light() {
             for (px, i) in judge.data.iter_mut().enumerate() {
                 *i = late.iter().map(|r| r.data[px]).sum::<glam::Vec3>() / late.len() as f32;
             }
-            let errors: Vec<_> = (1..=4)
-                .map(|seed| {
-                    let g = gpu_frame(
-                        &scene,
-                        32,
-                        irad::vpl::sampler::SamplerKind::Uniform,
-                        seed,
-                        Compensate::Auto,
-                    );
-                    irad::metrics::frame_error(&g, &judge).unwrap()
-                })
-                .collect();
-            let each = |f: &dyn Fn(&irad::metrics::FrameError) -> String| {
-                errors.iter().map(f).collect::<Vec<_>>().join(", ")
-            };
-            println!(
-                "| {} mm | {} | {:.3} | {:.3} | {:.3}, {:.3} | {} | {} |",
-                gap * 1e3,
-                if double { "double" } else { "single" },
-                noise(&early).rel_mse,
-                noise(&late).rel_mse,
-                (early[0].mean() + early[1].mean()).element_sum() / 6.0,
-                judge.mean().element_sum() / 3.0,
-                each(&|e| format!("{:.3}", e.rel_mse)),
-                each(&|e| format!("{:+.1}%", 100.0 * e.rel_bias)),
-            );
+            for sampler in [
+                irad::vpl::sampler::SamplerKind::Uniform,
+                irad::vpl::sampler::SamplerKind::Mh,
+            ] {
+                let errors: Vec<_> = (1..=4)
+                    .map(|seed| {
+                        let g = gpu_frame(&scene, 32, sampler, seed, Compensate::Auto);
+                        irad::metrics::frame_error(&g, &judge).unwrap()
+                    })
+                    .collect();
+                let each = |f: &dyn Fn(&irad::metrics::FrameError) -> String| {
+                    errors.iter().map(f).collect::<Vec<_>>().join(", ")
+                };
+                println!(
+                    "| {} mm | {} | {:.3} | {:.3} | {:.3}, {:.3} | {sampler:?} | {} | {} |",
+                    gap * 1e3,
+                    if double { "double" } else { "single" },
+                    noise(&early).rel_mse,
+                    noise(&late).rel_mse,
+                    (early[0].mean() + early[1].mean()).element_sum() / 6.0,
+                    judge.mean().element_sum() / 3.0,
+                    each(&|e| format!("{:.3}", e.rel_mse)),
+                    each(&|e| format!("{:+.1}%", 100.0 * e.rel_bias)),
+                );
+            }
         }
     }
 }
