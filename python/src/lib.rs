@@ -468,7 +468,7 @@ fn reference<'py>(
         irad::commands::reference::trace_frames(
             &scene,
             seq,
-            cfg.spp,
+            cfg.sampling(),
             frames.iter(),
             &|| {},
             &mut |f, t, img| {

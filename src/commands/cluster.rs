@@ -545,18 +545,20 @@ pub fn run_job(dir: &Path, plan: &PlanFile, study: &Study, index: usize) -> Resu
             let folder = dir.join(reference_folder(half.as_deref()));
             crate::report::prepare_out_dir(&folder)?;
             remove_temporaries(&folder, *a..*b);
-            let (scene, seq, exposure, numbers) = match (study, &compare) {
+            let (scene, seq, exposure, numbers, rr_cap_depth) = match (study, &compare) {
                 (Study::Compare(c), Some(p)) => (
                     p.scene.clone(),
                     c.sequence.clone(),
                     c.render.exposure,
                     p.numbers.clone(),
+                    crate::reference::RR_CAP_DEPTH,
                 ),
                 (Study::Reference(r), _) => (
                     r.sequence.load_scene(config::DEFAULT_STILL_SCENE)?,
                     r.sequence.clone(),
                     r.exposure,
                     r.sequence.frames_or_first().iter().collect(),
+                    r.rr_cap_depth,
                 ),
                 _ => unreachable!("a compare has its plan"),
             };
@@ -581,7 +583,10 @@ pub fn run_job(dir: &Path, plan: &PlanFile, study: &Study, index: usize) -> Resu
             crate::commands::reference::trace_walking(
                 &scene,
                 &seq,
-                *spp,
+                crate::reference::Sampling {
+                    spp: *spp,
+                    rr_cap_depth,
+                },
                 numbers.iter().copied().take_while(|&f| f < *b && todo > 0),
                 &|f| (*a..*b).contains(&f) && !cached.contains(&f),
                 &|| pb.inc(1),

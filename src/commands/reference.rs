@@ -2,6 +2,7 @@
 
 use crate::config;
 use crate::image::Hdr;
+use crate::reference::Sampling;
 use crate::report;
 use crate::trace::Tracer;
 use anyhow::Result;
@@ -30,14 +31,14 @@ pub struct ReferenceFrame {
     pub mean_rgb: [f32; 3],
 }
 
-/// The reference renderer's parameters for a sequence and spp.
-pub fn params(seq: &config::Sequence, spp: u32) -> crate::reference::ReferenceSettings {
+/// The reference renderer's parameters for a sequence and a sampling.
+pub fn params(seq: &config::Sequence, s: Sampling) -> crate::reference::ReferenceSettings {
     crate::reference::ReferenceSettings {
         width: seq.size.width,
         height: seq.size.height,
-        spp,
+        spp: s.spp,
         seed: seq.seed,
-        ..Default::default()
+        rr_cap_depth: s.rr_cap_depth,
     }
 }
 
@@ -46,12 +47,12 @@ pub fn params(seq: &config::Sequence, spp: u32) -> crate::reference::ReferenceSe
 pub fn trace_frames(
     scene: &crate::scene::Scene,
     seq: &config::Sequence,
-    spp: u32,
+    sampling: Sampling,
     frames: impl IntoIterator<Item = u32>,
     tick: &(dyn Fn() + Sync),
     done: &mut dyn FnMut(u32, f32, Hdr) -> Result<()>,
 ) -> Result<()> {
-    trace_walking(scene, seq, spp, frames, &|_| true, tick, done)
+    trace_walking(scene, seq, sampling, frames, &|_| true, tick, done)
 }
 
 /// Path-traces the frames of `walk` that are `wanted`, with the tracer updated through every
@@ -64,13 +65,13 @@ pub fn trace_frames(
 pub fn trace_walking(
     scene: &crate::scene::Scene,
     seq: &config::Sequence,
-    spp: u32,
+    sampling: Sampling,
     walk: impl IntoIterator<Item = u32>,
     wanted: &dyn Fn(u32) -> bool,
     tick: &(dyn Fn() + Sync),
     done: &mut dyn FnMut(u32, f32, Hdr) -> Result<()>,
 ) -> Result<()> {
-    let p = params(seq, spp);
+    let p = params(seq, sampling);
     let mut tracer: Option<Tracer> = None;
     for f in walk {
         let frame = scene.at(seq.time(f));
@@ -115,7 +116,7 @@ pub fn reference(cfg: &config::Reference) -> Result<Vec<Hdr>> {
     trace_frames(
         &scene,
         seq,
-        cfg.spp,
+        cfg.sampling(),
         // A signal stops the run between frames (the frame in flight is finished).
         frames.iter().take_while(|_| !crate::interrupt::requested()),
         &|| pb.inc(1),

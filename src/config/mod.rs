@@ -216,6 +216,12 @@ pub struct Reference {
     /// Samples per pixel
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().spp, allow_hyphen_values = true))]
     pub spp: u32,
+    /// The bounce from which Russian roulette lets a path go on with probability at most 0.95
+    /// (as Mitsuba 3 does from its rr_depth); before it, a path between albedo-1 surfaces goes
+    /// on at weight 1. Later converges faster where light bounces long between white surfaces
+    /// (3 to 4096; docs/math.md, "What the reference can show of a gap")
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().rr_cap_depth, allow_hyphen_values = true))]
+    pub rr_cap_depth: u32,
     /// Output folder
     #[cfg_attr(feature = "cli", arg(long, default_value_os_t = Reference::default().out))]
     pub out: PathBuf,
@@ -241,6 +247,7 @@ impl Default for Reference {
         Reference {
             sequence: Sequence::default(),
             spp: 256,
+            rr_cap_depth: crate::reference::RR_CAP_DEPTH,
             out: PathBuf::from("out/reference"),
             overwrite: false,
             exposure: 1.0,
@@ -264,7 +271,15 @@ impl Reference {
             height: self.sequence.size.height,
             spp: self.spp,
             seed: self.sequence.seed,
-            ..Default::default()
+            rr_cap_depth: self.rr_cap_depth,
+        }
+    }
+
+    /// How this reference traces each pixel.
+    pub fn sampling(&self) -> crate::reference::Sampling {
+        crate::reference::Sampling {
+            spp: self.spp,
+            rr_cap_depth: self.rr_cap_depth,
         }
     }
 }

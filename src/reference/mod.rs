@@ -49,6 +49,24 @@ pub struct ReferenceSettings {
     pub rr_cap_depth: u32,
 }
 
+/// How a reference traces each pixel: samples a pixel, and the bounce from which its roulette
+/// is capped ([`ReferenceSettings::rr_cap_depth`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    pub spp: u32,
+    pub rr_cap_depth: u32,
+}
+
+impl Sampling {
+    /// `spp` samples a pixel, the cap from the default bounce (what `irad compare` traces).
+    pub fn spp(spp: u32) -> Self {
+        Sampling {
+            spp,
+            rr_cap_depth: RR_CAP_DEPTH,
+        }
+    }
+}
+
 /// The first bounce after which a reference path may end by Russian roulette.
 pub const RR_DEPTH: u32 = 3;
 /// [`ReferenceSettings::rr_cap_depth`]'s default: the cap from the first bounce roulette acts on.

@@ -479,3 +479,82 @@ fn a_killed_job_is_redone_to_the_same_frames() {
     }
     std::fs::remove_dir_all(&root).unwrap();
 }
+
+/// `irad reference --rr-cap-depth`: in a furnace of albedo 0.99 (radiance 100) a reference
+/// capped from bounce 4096 differs from one capped from 3 (the default) and comes out nearer
+/// 100 on average; run.json records it; a plan's jobs trace with it (collected frames equal
+/// the single-machine ones); out of range, the flag is named.
+#[test]
+fn the_roulettes_cap_depth_reaches_every_trace() {
+    let root = fresh_dir("cluster-rr-cap-depth");
+    std::fs::create_dir_all(&root).unwrap();
+    let furnace =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/furnace.gltf"))
+            .unwrap();
+    let mut white: serde_json::Value = serde_json::from_str(&furnace).unwrap();
+    white["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] =
+        serde_json::json!([0.99, 0.99, 0.99, 1.0]);
+    let white = white.to_string();
+    std::fs::write(root.join("white.gltf"), white).unwrap();
+    let study = ["white.gltf", "--size", "8x8", "--spp", "256"];
+    let trace = |out: &str, extra: &[&str]| {
+        let mut a = vec!["reference"];
+        a.extend(study);
+        a.extend(["--out", out]);
+        a.extend(extra);
+        ok(out, irad_in(&root, &a));
+        std::fs::read(root.join(out).join("frame_0000.exr")).unwrap()
+    };
+    let late = trace("late", &["--rr-cap-depth", "4096"]);
+    let early = trace("early", &[]);
+    assert_ne!(late, early);
+    let mean = |dir: &str| -> f64 {
+        let run: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(root.join(dir).join("run.json")).unwrap())
+                .unwrap();
+        run["frames"][0]["mean_rgb"][0].as_f64().unwrap()
+    };
+    // Measured: 100.0 capped from 4096, 80.0 from 3.
+    println!(
+        "mean capped from 4096: {}, from 3: {}",
+        mean("late"),
+        mean("early")
+    );
+    assert!((mean("late") - 100.0).abs() < 3.0, "{}", mean("late"));
+    assert!(
+        (mean("early") - 100.0).abs() > (mean("late") - 100.0).abs(),
+        "{} {}",
+        mean("early"),
+        mean("late")
+    );
+    let run: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("late/run.json")).unwrap()).unwrap();
+    assert_eq!(run["settings"]["rr_cap_depth"], 4096);
+    // Planned: one frame, one job, which traces capped from 4096.
+    let mut plan = vec!["reference"];
+    plan.extend(study);
+    plan.extend([
+        "--rr-cap-depth",
+        "4096",
+        "--out",
+        "collected",
+        "--plan",
+        "plan",
+    ]);
+    ok("plan", irad_in(&root, &plan));
+    ok("job", irad_in(&root, &["job", "plan", "0"]));
+    ok(
+        "collect",
+        irad_in(&root, &["reference", "--collect", "plan"]),
+    );
+    assert!(std::fs::read(root.join("collected/frame_0000.exr")).unwrap() == late);
+    let e = fails(
+        "cap 2",
+        irad_in(&root, &["reference", "white.gltf", "--rr-cap-depth", "2"]),
+    );
+    assert!(
+        e.contains("--rr-cap-depth 2 is out of range: it must be 3 to 4096"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&root).unwrap();
+}

@@ -352,7 +352,7 @@ fn the_floor_is_what_a_near_perfect_renderer_measures() {
         trace_frames(
             &scene,
             &seq(seed),
-            spp,
+            irad::reference::Sampling::spp(spp),
             numbers.clone(),
             &|| {},
             &mut |_, _, img| {

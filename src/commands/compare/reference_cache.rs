@@ -114,7 +114,7 @@ fn half(plan: &Plan, h: usize, spp: u32, tick: &(dyn Fn() + Sync)) -> Result<Vec
     crate::commands::reference::trace_walking(
         &plan.scene,
         &seq,
-        spp,
+        crate::reference::Sampling::spp(spp),
         plan.numbers
             .iter()
             .copied()
