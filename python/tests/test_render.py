@@ -1,6 +1,7 @@
 """Frames from Python are the CLI's frames, bit for bit; long iterator renders stay flat."""
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -67,6 +68,23 @@ def test_reference_equals_the_cli(cli_reference):
     for f in frames:
         exr = irad.read_image(cli_reference / f"frame_{f.index:04}.exr")
         assert np.array_equal(f.image, exr)
+
+
+def test_reference_takes_the_roulettes_cap_depth(tmp_path):
+    # An albedo-0.99 furnace (radiance 100): capped from bounce 4096 the reference averages
+    # 100.0, capped from 3 (the default) 80.0; the CLI gives the same image.
+    import json
+
+    scene = json.loads((Path(__file__).parents[2] / "scenes/furnace.gltf").read_text())
+    scene["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = [0.99, 0.99, 0.99, 1.0]
+    white = tmp_path / "white.gltf"
+    white.write_text(json.dumps(scene))
+    late = irad.reference(str(white), size=(8, 8), spp=256, rr_cap_depth=4096)[0].image
+    early = irad.reference(str(white), size=(8, 8), spp=256)[0].image
+    assert abs(late.mean() - 100.0) < 3.0 and abs(early.mean() - 100.0) > 10.0
+    cli("reference", str(white), "--size", "8x8", "--spp", "256", "--rr-cap-depth", "4096",
+        "--out", str(tmp_path / "cli"))
+    assert np.array_equal(late, irad.read_image(tmp_path / "cli/frame_0000.exr"))
 
 
 def rss_mib() -> float:
