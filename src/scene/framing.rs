@@ -1,8 +1,11 @@
 //! A camera for a file that has none: one that sees what the lights light. Points spread
 //! over the surfaces by area are lit by a few emitter samples (with shadow rays); eyes around
-//! the lit region, outside it and inside it, are scored by the light of the points they see.
-//! An eye inside a closed mesh (most rays from it first meet the inside of a solid) is never
-//! chosen.
+//! the lit region, outside it and inside it, are scored by the light of the points they see,
+//! each weighted by the cosine it is seen at (its share of the image). Views within a few
+//! percent of the best are told apart by how many triangles they see: a board lit by a sky
+//! on both sides is seen from its front, where its panels are, not from its plain back (the
+//! Khronos TextureSettingsTest). An eye inside a closed mesh (most rays from it first meet
+//! the inside of a solid) is never chosen.
 
 use super::{Camera, Frame};
 use crate::trace::Tracer;
@@ -20,7 +23,12 @@ struct Lit {
     x: Vec3,
     n: Vec3,
     e: f32,
+    tri: u32,
 }
+
+/// Views whose scores are within this fraction of the best are told apart by how many of the
+/// model's triangles they see (a few percent is the score's own noise at [`POINTS`] points).
+const NEAR_BEST: f32 = 0.05;
 
 /// The camera that sees the most light among eyes around the lit region, or the camera
 /// framing the bounds from +Z when nothing is lit at this frame.
@@ -42,7 +50,7 @@ pub fn lit_camera(frame: &Frame) -> Camera {
     let radius = ((bhi - blo).length() * 0.5).max(1e-3);
     let dist = 1.1 * radius / (YFOV * 0.5).sin();
     let solid = solid_triangles(frame);
-    let mut best = (0.0, fallback);
+    let mut views = Vec::new();
     for f in [1.0, 0.6, 0.3] {
         for dir in directions() {
             let eye = center + dir * dist * f;
@@ -50,13 +58,26 @@ pub fn lit_camera(frame: &Frame) -> Camera {
                 continue;
             }
             let cam = look_from(eye, center);
-            let s = score(&cam, &lit, &tracer);
-            if s > best.0 {
-                best = (s, cam);
-            }
+            let (s, parts) = score(&cam, &lit, &tracer);
+            views.push((s, parts, cam));
         }
     }
-    best.1
+    // The most light; among views within NEAR_BEST of it, the one that sees the most
+    // triangles (a board's front, with its panels, over its plain back), then the most light.
+    let top = views.iter().map(|v| v.0).fold(0.0f32, f32::max);
+    let mut best: Option<(f32, usize, Camera)> = None;
+    for v in views
+        .into_iter()
+        .filter(|v| v.0 > 0.0 && v.0 >= (1.0 - NEAR_BEST) * top)
+    {
+        if best
+            .as_ref()
+            .is_none_or(|b| v.1 > b.1 || (v.1 == b.1 && v.0 > b.0))
+        {
+            best = Some(v);
+        }
+    }
+    best.map_or(fallback, |b| b.2)
 }
 
 /// For each triangle, whether it belongs to a closed mesh.
@@ -130,16 +151,30 @@ fn lit_points(frame: &Frame, tracer: &Tracer) -> Vec<Lit> {
             let tri = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
             let b = crate::math::triangle_barycentrics(Vec2::new(r.random(), r.random()));
             let x = frame.point(tri, b.x, b.y);
-            irradiance(frame.normals[tri], x, &samples, tracer)
+            let single = tracer.single_sided(tri as u32);
+            irradiance(frame.normals[tri], x, &samples, tracer, single).map(|(n, e)| Lit {
+                x,
+                n,
+                e,
+                tri: tri as u32,
+            })
         })
         .collect()
 }
 
-/// The light at `x` on whichever side of the surface gets more, or None if unlit.
-fn irradiance(n: Vec3, x: Vec3, samples: &[super::EmitterSample], tracer: &Tracer) -> Option<Lit> {
+/// The light at `x` on whichever side of the surface gets more (the front only where the
+/// surface is single-sided: nothing sees its back), with that side's normal, or None if unlit.
+fn irradiance(
+    n: Vec3,
+    x: Vec3,
+    samples: &[super::EmitterSample],
+    tracer: &Tracer,
+    single_sided: bool,
+) -> Option<(Vec3, f32)> {
     let mut side = [0.0f32; 2];
+    let sides: &[Vec3] = if single_sided { &[n] } else { &[n, -n] };
     for s in samples {
-        for (k, nk) in [n, -n].into_iter().enumerate() {
+        for (k, &nk) in sides.iter().enumerate() {
             if let Some((e, y, ny)) = s.irradiance_at(x, nk) {
                 if !tracer.occluded(x, nk, y, ny) {
                     side[k] += crate::math::luminance(e);
@@ -152,22 +187,34 @@ fn irradiance(n: Vec3, x: Vec3, samples: &[super::EmitterSample], tracer: &Trace
     } else {
         (side[1], -n)
     };
-    (e > 0.0 && e.is_finite()).then_some(Lit { x, n, e })
+    (e > 0.0 && e.is_finite()).then_some((n, e))
 }
 
-/// The light of the lit points that `cam` sees: in its view, facing it, not occluded.
-fn score(cam: &Camera, lit: &[Lit], tracer: &Tracer) -> f32 {
+/// The light of the lit points that `cam` sees (in its view, facing it, not occluded), each
+/// weighted by the cosine it is seen at: the points stand for equal areas of surface, whose
+/// image shrinks with that cosine, so a flat board seen edge-on (both of its faces lit by a
+/// sky, each facing the eye by a hair) scores next to nothing. And how many distinct
+/// triangles those points lie on.
+fn score(cam: &Camera, lit: &[Lit], tracer: &Tracer) -> (f32, usize) {
     let half = YFOV * 0.5;
-    lit.iter()
-        .filter(|l| {
-            let v = cam.position - l.x;
-            let to = -v.normalize();
-            l.n.dot(v) > 0.0
-                && cam.forward.dot(to).clamp(-1.0, 1.0).acos() < half
+    let mut tris = Vec::new();
+    let light = lit
+        .iter()
+        .filter_map(|l| {
+            let v = (cam.position - l.x).normalize();
+            let cos = l.n.dot(v);
+            (cos > 0.0
+                && cam.forward.dot(-v).clamp(-1.0, 1.0).acos() < half
                 // Traced from the eye, the receiver (single-sided surfaces are seen from the
                 // front only: docs/math.md).
-                && !tracer.occluded(cam.position, Vec3::ZERO, l.x, l.n)
+                && !tracer.occluded(cam.position, Vec3::ZERO, l.x, l.n))
+            .then(|| {
+                tris.push(l.tri);
+                l.e * cos
+            })
         })
-        .map(|l| l.e)
-        .sum()
+        .sum();
+    tris.sort_unstable();
+    tris.dedup();
+    (light, tris.len())
 }

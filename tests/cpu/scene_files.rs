@@ -554,12 +554,70 @@ fn a_file_without_a_camera_looks_at_the_lit_floor() {
     s.set_camera(old.position, old.position + old.forward, old.yfov)
         .unwrap();
     let before = floor_seen(&s);
-    // Measured: 0.207 of the rays land on the floor's lit face with the new camera, 0.020 with
-    // the old one.
+    // Measured: 0.316 of the rays land on the floor's lit face with the new camera (0.207
+    // before the views were weighted by the cosine they see the points at), 0.020 with the
+    // old one.
     assert!(
-        seen > 0.14 && seen > 5.0 * before,
+        seen > 0.25 && seen > 5.0 * before,
         "new {seen}, old {before}"
     );
+}
+
+/// A flat board with no lamp (so a sky lights both of its sides), as the Khronos boards
+/// (TextureSettingsTest) are: single-sided panels facing its front at z = 0, before a
+/// background of two single-sided quads, one facing front at z = 0.1 and one facing back at
+/// z = 0.15. Turned to face each of the six axis directions, the automatic camera looks at its
+/// front, face-on. Before: it looked along the board's plane (TextureSettingsTest, seen
+/// edge-on from (0, -19.3, 0)), where lit points of both faces faced the eye by a hair.
+#[test]
+fn a_board_without_lights_is_framed_from_its_front() {
+    let rotations = [
+        glam::Quat::IDENTITY,
+        glam::Quat::from_rotation_y(std::f32::consts::PI),
+        glam::Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+        glam::Quat::from_rotation_y(-std::f32::consts::FRAC_PI_2),
+        glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+        glam::Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+    ];
+    for q in rotations {
+        let mut g = Gltf::default();
+        let square = |h: f32, z: f32| [[-h, -h, z], [h, -h, z], [h, h, z], [-h, h, z]];
+        let front = g.indices(&[0, 2, 1, 0, 3, 2]);
+        let back = g.indices(&[0, 1, 2, 0, 2, 3]);
+        let prim = |p: usize, i: usize| json!({ "attributes": { "POSITION": p }, "indices": i, "material": 0 });
+        let panels: Vec<Value> = [(-1.2, 0.6), (1.2, 0.6), (-1.2, -0.6), (1.2, -0.6)]
+            .iter()
+            .map(|&(x, y): &(f32, f32)| {
+                let p = square(0.4, 0.0).map(|v| [v[0] + x, v[1] + y, v[2]]);
+                prim(g.positions(&p), front)
+            })
+            .collect();
+        let bg_front = prim(g.positions(&square(2.0, 0.1)), front);
+        let bg_back = prim(g.positions(&square(2.0, 0.15)), back);
+        let mut all = panels;
+        all.extend([bg_front, bg_back]);
+        let r = q.to_array();
+        let doc = json!({
+            "scenes": [{ "nodes": [0] }],
+            "nodes": [{ "mesh": 0, "rotation": r }],
+            "meshes": [{ "primitives": all }],
+            "materials": materials(),
+        });
+        let s = load(&g.finish(doc)).unwrap();
+        let f = s.at(0.0);
+        let facing = q * glam::Vec3::NEG_Z;
+        let cos = -f.camera.forward.dot(facing);
+        println!(
+            "board facing {facing}: camera at {}, cos {cos}",
+            f.camera.position
+        );
+        // Measured: 1.0 for every side (the eye straight in front).
+        assert!(
+            cos > 0.95,
+            "board facing {facing}: camera forward {}",
+            f.camera.forward
+        );
+    }
 }
 
 #[test]
