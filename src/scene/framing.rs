@@ -27,7 +27,8 @@ struct Lit {
 }
 
 /// Views whose scores are within this fraction of the best are told apart by how many of the
-/// model's triangles they see (a few percent is the score's own noise at [`POINTS`] points).
+/// model's triangles they see: a score sums the light of at most [`POINTS`] points, too few to
+/// rank views this close (a board's front and back score the same lit area).
 const NEAR_BEST: f32 = 0.05;
 
 /// The camera that sees the most light among eyes around the lit region, or the camera
