@@ -31,17 +31,6 @@ pub struct ReferenceFrame {
     pub mean_rgb: [f32; 3],
 }
 
-/// The reference renderer's parameters for a sequence and a sampling.
-pub fn params(seq: &config::Sequence, s: Sampling) -> crate::reference::ReferenceSettings {
-    crate::reference::ReferenceSettings {
-        width: seq.size.width,
-        height: seq.size.height,
-        spp: s.spp,
-        seed: seq.seed,
-        rr_cap_depth: s.rr_cap_depth,
-    }
-}
-
 /// Path-traces frame indices `frames` of `scene`, calling `tick` once per image row and
 /// `done` with each finished image (in order).
 pub fn trace_frames(
@@ -71,7 +60,7 @@ pub fn trace_walking(
     tick: &(dyn Fn() + Sync),
     done: &mut dyn FnMut(u32, f32, Hdr) -> Result<()>,
 ) -> Result<()> {
-    let p = params(seq, sampling);
+    let p = seq.reference_settings(sampling);
     let mut tracer: Option<Tracer> = None;
     for f in walk {
         let frame = scene.at(seq.time(f));

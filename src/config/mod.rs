@@ -266,13 +266,7 @@ impl Reference {
 
     /// The path tracer's settings of this reference.
     pub fn settings(&self) -> crate::reference::ReferenceSettings {
-        crate::reference::ReferenceSettings {
-            width: self.sequence.size.width,
-            height: self.sequence.size.height,
-            spp: self.spp,
-            seed: self.sequence.seed,
-            rr_cap_depth: self.rr_cap_depth,
-        }
+        self.sequence.reference_settings(self.sampling())
     }
 
     /// How this reference traces each pixel.

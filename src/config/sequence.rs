@@ -346,6 +346,20 @@ impl Default for Sequence {
 }
 
 impl Sequence {
+    /// The path tracer's settings for this sequence's size and seed and a sampling.
+    pub fn reference_settings(
+        &self,
+        s: crate::reference::Sampling,
+    ) -> crate::reference::ReferenceSettings {
+        crate::reference::ReferenceSettings {
+            width: self.size.width,
+            height: self.size.height,
+            spp: s.spp,
+            seed: self.seed,
+            rr_cap_depth: s.rr_cap_depth,
+        }
+    }
+
     pub fn validate(&self) -> Result<()> {
         check::float("`fps`", self.fps, 0.0, true, 1000.0)?;
         match &self.camera {
