@@ -315,7 +315,7 @@ impl Tracer {
     fn intersect_facing(&self, origin: Vec3, dir: Vec3, tmax: f32, facing: Facing) -> Option<Hit> {
         // In the BVH's coordinates (the frame's times k, exactly).
         let origin = origin * self.k;
-        let mut ray = Ray::new(origin.into(), dir.into(), 0.0, tmax * self.k);
+        let mut ray = ray(origin, dir, tmax * self.k);
         let mut best = None;
         for part in [&self.still, &self.moving] {
             let Some(bvh) = &part.bvh else { continue };
@@ -355,7 +355,7 @@ impl Tracer {
         if len <= eps {
             return false;
         }
-        let ray = Ray::new(a.into(), (d / len).into(), 0.0, len * (1.0 - 1e-4));
+        let ray = ray(a, d / len, len * (1.0 - 1e-4));
         [&self.still, &self.moving].into_iter().any(|part| {
             part.bvh.as_ref().is_some_and(|bvh| {
                 !bvh.ray_traverse_miss(ray, |r, id| self.hit_distance(part, r, id, Facing::Seen))
@@ -369,10 +369,49 @@ impl Tracer {
     }
 }
 
+/// An obvhs ray from `origin` along `dir` (unit) up to `tmax`, with any `-0.0` component of
+/// `dir` made `+0.0`: obvhs 0.4's traversal takes a ray's octant from `d < 0.0` (false for
+/// `-0.0`) and its inverse direction from the sign bit (`-1 / EPSILON`), so the two disagree
+/// and a ray such as `-Vec3::Y`, `(-0, -1, -0)`, missed everything.
+fn ray(origin: Vec3, dir: Vec3, tmax: f32) -> Ray {
+    Ray::new(origin.into(), (dir + Vec3::ZERO).into(), 0.0, tmax)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::scene::builtin;
+
+    /// A ray's direction may carry `-0.0` components (a negated axis-aligned normal): it hits
+    /// and is occluded as the same ray with `+0.0` ones. Before, `-Vec3::Y` from inside the
+    /// Cornell box hit nothing at all.
+    #[test]
+    fn negative_zero_components_do_not_lose_the_ray() {
+        let scene = builtin::load("cornell").unwrap().unwrap();
+        let f = scene.at(0.0);
+        let tr = Tracer::new(&f);
+        let o = Vec3::new(0.013, 0.5, 0.198);
+        for (axis, plain) in [
+            (Vec3::X, Vec3::NEG_X),
+            (Vec3::Y, Vec3::NEG_Y),
+            (Vec3::Z, Vec3::NEG_Z),
+        ] {
+            let negated = -axis;
+            assert!(negated
+                .to_array()
+                .iter()
+                .any(|c| *c == 0.0 && c.is_sign_negative()));
+            let a = tr.intersect(o, plain, f32::INFINITY).map(|h| (h.t, h.tri));
+            let b = tr
+                .intersect(o, negated, f32::INFINITY)
+                .map(|h| (h.t, h.tri));
+            assert!(a.is_some(), "{plain} from {o} hits the box");
+            assert_eq!(a, b, "{negated} from {o}");
+            let far = o + plain * 10.0;
+            assert!(tr.occluded(o, Vec3::ZERO, far, Vec3::ZERO), "{plain}");
+            assert!(tr.occluded(o, -axis, far, Vec3::ZERO), "{negated}");
+        }
+    }
 
     #[test]
     fn hits_the_back_wall_and_barycentrics_reconstruct_the_point() {
