@@ -6,6 +6,7 @@
 mod common;
 
 mod compensation;
+mod crevice;
 mod emission;
 mod environment;
 mod helpers;
