@@ -170,11 +170,16 @@ impl Pipeline {
         lap(&mut stages, "light_samples", &mut t);
         // The first surfaces each VPL sees, evenly over its ISM tile (closes the tiles of VPLs
         // next to a surface, which the point set leaves full of holes).
-        let near = crate::gpu::ism::near_points(
-            &self.tracer,
-            &selection.shaded,
-            self.renderer.near_directions(),
-        );
+        // The VPLs the GPU gathers: all but those the compensation alone reads (vpl::crevice).
+        let gathered: std::borrow::Cow<[crate::vpl::ShadedVpl]> =
+            if selection.shaded.iter().any(|v| v.near) {
+                let kept = selection.shaded.iter().filter(|v| !v.near);
+                kept.copied().collect::<Vec<_>>().into()
+            } else {
+                selection.shaded.as_slice().into()
+            };
+        let near =
+            crate::gpu::ism::near_points(&self.tracer, &gathered, self.renderer.near_directions());
         lap(&mut stages, "ism_near", &mut t);
         // The light's temporal gradient, for accumulation under a moving light or object: only
         // when a vertex or an emitter sample moved (else the history is used whole, and the
@@ -214,7 +219,7 @@ impl Pipeline {
         let image = self.renderer.render(
             &GpuFrame {
                 frame: &frame,
-                vpls: &selection.shaded,
+                vpls: &gathered,
                 emitter_samples: &lights,
                 clamp: s.clamp,
                 direct_clamp: if compensate { s.clamp } else { 0.0 },
@@ -323,6 +328,7 @@ impl Pipeline {
                 samples: &lights,
                 vpls: &selection.shaded,
                 clamp: s.clamp,
+                near_reach: f32::INFINITY,
             };
             let added = crate::compensation::compensate(
                 &frame,

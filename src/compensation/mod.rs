@@ -43,6 +43,8 @@ pub struct Light<'a> {
     pub samples: &'a [EmitterSample],
     pub vpls: &'a [ShadedVpl],
     pub clamp: f32,
+    /// How far from a crevice's VPL ([`crate::vpl::Vpl::near`]) its light is read.
+    pub near_reach: f32,
 }
 
 /// Bounces a compensation path takes at most (light that stays within the clamp of the
@@ -63,6 +65,18 @@ pub fn compensate(
     if rays == 0 || light.clamp <= 0.0 || light.vpls.is_empty() && light.samples.is_empty() {
         return Vec::new();
     }
+    // The VPLs the GPU's gather leaves out (`vpl::crevice`): their clamped light at the point
+    // a sub-sample sees is added here, as the gather adds the others'.
+    let near: Vec<ShadedVpl> = light.vpls.iter().filter(|v| v.near).copied().collect();
+    // At the point a pixel sees, a crevice's VPL lights only the neighbourhood its rays found
+    // closed (vpl::crevice): what reaches farther, out of the crevice, is what its coin left
+    // out before.
+    let near = Light {
+        samples: &[],
+        vpls: &near,
+        clamp: light.clamp,
+        near_reach: crate::vpl::crevice::REACH * tracer.size(),
+    };
     (0..(width * height) as usize)
         .into_par_iter()
         .filter_map(|i| {
@@ -86,6 +100,9 @@ pub fn compensate(
                 let s = SurfacePoint::seen(frame, &h, d);
                 let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
                 sum += path(frame, tracer, &s, light, (u, MAX_BOUNCES), &mut r);
+                if !near.vpls.is_empty() {
+                    sum += reflected(frame, tracer, &s, &near, r.random(), 0, VPLS_AT_HIT);
+                }
             }
             (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
         })
@@ -194,8 +211,10 @@ fn reflected(
     if m == 0 {
         return direct;
     }
+    let reach2 = light.near_reach * light.near_reach;
     let indirect: Vec3 = picked
         .map(|j| &light.vpls[j])
+        .filter(|v| !v.near || (v.position - y.x).length_squared() <= reach2)
         .map(|v| {
             let c = v.radiance_at(y.x, y.n, rho, light.clamp);
             if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {

@@ -83,7 +83,9 @@ impl LightGradient {
         let probes = probe_points(frame, tracer, width, height);
         let spacing = spacing(frame, &probes);
         let light = |vs: &[Vpl], x: Vec3, n: Vec3, h: f32| -> f32 {
+            // The light the GPU gathers: not a crevice's VPLs (vpl::crevice).
             vs.iter()
+                .filter(|v| !v.near)
                 .map(|v| {
                     let s = ShadedVpl::new(v, 1.0 / PROBE_PATHS as f32);
                     let c = s.radiance_at(x, n, Vec3::ONE, clamp.max(h));

@@ -20,6 +20,8 @@ pub struct ShadedVpl {
     pub position: Vec3,
     pub normal: Vec3,
     pub flux: Vec3,
+    /// Read by the compensation alone ([`Vpl::near`]).
+    pub near: bool,
 }
 
 impl ShadedVpl {
@@ -28,6 +30,7 @@ impl ShadedVpl {
             position: v.position,
             normal: v.normal,
             flux: v.power * v.albedo * weight,
+            near: v.near,
         }
     }
 

@@ -38,6 +38,9 @@ pub struct Vpl {
     pub depth: u32,
     pub path: u64,
     pub tri: u32,
+    /// A crevice vertex none of whose rays got out (`vpl::crevice`): only the compensation,
+    /// with exact visibility, reads its light; the GPU's gather does not.
+    pub near: bool,
 }
 
 /// Traces light path `path` of stream `seed` in `frame`, returning its VPLs (possibly none).
@@ -104,7 +107,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo_at(tri, h.b1, h.b2);
         // A vertex in a crevice is kept by a coin (vpl::crevice); the path goes on either way.
-        if let Some(p) = super::crevice::keep(tracer, x, nf, (seed, path, depth)) {
+        if let Some((p, near)) = super::crevice::keep(tracer, x, nf, (seed, path, depth)) {
             out.push(Vpl {
                 position: x,
                 normal: nf,
@@ -113,6 +116,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
                 depth,
                 path,
                 tri: h.tri,
+                near,
             });
         }
         // Russian roulette on albedo.

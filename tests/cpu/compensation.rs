@@ -25,6 +25,7 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
             position: v.position,
             normal: v.normal,
             flux: v.power * v.albedo / n as f32,
+            near: v.near,
         })
         .collect();
     let samples = f.emitter_samples(3, 1024);
@@ -34,6 +35,7 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
         samples: &samples,
         vpls: &vpls,
         clamp,
+        near_reach: f32::INFINITY,
     };
     let (w, h) = (24, 24);
     let points = twin::pixel_points(&f, &t, w, h);

@@ -3,7 +3,7 @@
 
 use crate::common::quads::{load, Quads};
 use irad::trace::Tracer;
-use irad::vpl::crevice::{keep, RAYS, REACH};
+use irad::vpl::crevice::{keep, NEAR_KEEP, RAYS, REACH};
 use serde_json::json;
 
 /// Two 2 x 2 plates facing each other `gap` apart (the lower at y = 0, facing up).
@@ -40,26 +40,40 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
         let gap = reach * a;
         // The rays leave from the point offset by the tracer's epsilon toward the other plate.
         let f = (((gap - tracer.epsilon()) / reach) as f64).powi(2);
-        let expected = 1.0 - (1.0 - side * f).max(0.0).powf(side);
+        let gathered = 1.0 - (1.0 - side * f).max(0.0).powf(side);
         let n = 20000u64;
-        let weights: Vec<f64> = (0..n)
+        let coins: Vec<Option<(f32, bool)>> = (0..n)
             .map(|path| {
                 let x = glam::Vec3::new(0.0137, 0.0, -0.0291);
-                keep(&tracer, x, glam::Vec3::Y, (7, path, 1)).map_or(0.0, |p| 1.0 / p as f64)
+                keep(&tracer, x, glam::Vec3::Y, (7, path, 1))
             })
             .collect();
-        let mean = weights.iter().sum::<f64>() / n as f64;
-        let var = weights.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-        let se = (var / n as f64).sqrt();
-        let largest = weights.iter().cloned().fold(0.0, f64::max);
-        println!(
-            "gap {gap:.5} m (reach / {:.0}): light kept {mean:.4} +- {se:.4}, expected {expected:.4}, largest weight {largest}",
-            1.0 / a
-        );
-        assert!(
-            (mean - expected).abs() <= 4.0 * se + 1e-3,
-            "gap {gap} m: the coin keeps {mean:.4} +- {se:.4} of the light, expected {expected:.4}"
-        );
-        assert!(largest <= 4.0, "gap {gap} m: a weight of {largest}");
+        // The light kept as VPLs the GPU gathers, and as VPLs the compensation alone reads.
+        for (near, expected) in [(false, gathered), (true, 1.0 - gathered)] {
+            let weights: Vec<f64> = coins
+                .iter()
+                .map(|c| match c {
+                    Some((p, v)) if *v == near => 1.0 / *p as f64,
+                    _ => 0.0,
+                })
+                .collect();
+            let mean = weights.iter().sum::<f64>() / n as f64;
+            let var = weights.iter().map(|w| (w - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+            let se = (var / n as f64).sqrt();
+            let largest = weights.iter().cloned().fold(0.0, f64::max);
+            println!(
+                "gap {gap:.5} m (reach / {:.0}), near {near}: light kept {mean:.4} +- {se:.4}, expected {expected:.4}, largest weight {largest}",
+                1.0 / a
+            );
+            assert!(
+                (mean - expected).abs() <= 4.0 * se + 1e-3,
+                "gap {gap} m, near {near}: the coin keeps {mean:.4} +- {se:.4} of the light, expected {expected:.4}"
+            );
+            let bound = if near { 1.0 / NEAR_KEEP as f64 } else { 4.0 };
+            assert!(
+                largest <= bound,
+                "gap {gap} m, near {near}: a weight of {largest}"
+            );
+        }
     }
 }

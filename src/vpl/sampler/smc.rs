@@ -324,6 +324,7 @@ pub(super) fn newborns(
                 depth: 0,
                 path: f * PATHS_PER_FRAME + i as u64,
                 tri: 0,
+                near: false,
             }),
         };
         out.born.push((pa, vs, imp));
