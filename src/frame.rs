@@ -328,7 +328,6 @@ impl Pipeline {
                 samples: &lights,
                 vpls: &selection.shaded,
                 clamp: s.clamp,
-                near_reach: f32::INFINITY,
             };
             let added = crate::compensation::compensate(
                 &frame,

@@ -43,8 +43,6 @@ pub struct Light<'a> {
     pub samples: &'a [EmitterSample],
     pub vpls: &'a [ShadedVpl],
     pub clamp: f32,
-    /// How far from a crevice's VPL ([`crate::vpl::Vpl::near`]) its light is read.
-    pub near_reach: f32,
 }
 
 /// Bounces a compensation path takes at most (light that stays within the clamp of the
@@ -75,8 +73,8 @@ pub fn compensate(
         samples: &[],
         vpls: &near,
         clamp: light.clamp,
-        near_reach: crate::vpl::crevice::REACH * tracer.size(),
     };
+    let reach = crate::vpl::crevice::REACH * tracer.size();
     (0..(width * height) as usize)
         .into_par_iter()
         .filter_map(|i| {
@@ -101,7 +99,8 @@ pub fn compensate(
                 let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
                 sum += path(frame, tracer, &s, light, (u, MAX_BOUNCES), &mut r);
                 if !near.vpls.is_empty() {
-                    sum += reflected(frame, tracer, &s, &near, r.random(), 0, VPLS_AT_HIT);
+                    let subset = (r.random(), 0, VPLS_AT_HIT);
+                    sum += reflected(frame, tracer, &s, &near, subset, reach);
                 }
             }
             (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
@@ -146,7 +145,8 @@ pub fn path(
         } else {
             (1, VPLS_LATER)
         };
-        sum += beta * (le + reflected(frame, tracer, &y, light, r.random(), samples, vpls));
+        let subset = (r.random(), samples, vpls);
+        sum += beta * (le + reflected(frame, tracer, &y, light, subset, f32::INFINITY));
         let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
         beta *= rho;
         let q = beta.max_element().min(ROULETTE);
@@ -170,15 +170,15 @@ const VPLS_LATER: usize = 4;
 /// The light reflected at `y` (direct from `samples` of the emitter samples, clamped as the
 /// direct pass clamps points on emitter triangles, and indirect from a stratified subset of
 /// `vpls` VPLs starting at fraction `u` of them, clamped), with exact visibility; a subset
-/// stands for the whole by its share.
+/// stands for the whole by its share. A crevice's VPL ([`crate::vpl::Vpl::near`]) farther
+/// than `near_reach` from `y` gives nothing.
 fn reflected(
     frame: &Frame,
     tracer: &Tracer,
     y: &SurfacePoint,
     light: &Light,
-    u: f32,
-    samples: usize,
-    vpls: usize,
+    (u, samples, vpls): (f32, usize, usize),
+    near_reach: f32,
 ) -> Vec3 {
     let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
     let clamp2 = light.clamp * light.clamp;
@@ -211,7 +211,7 @@ fn reflected(
     if m == 0 {
         return direct;
     }
-    let reach2 = light.near_reach * light.near_reach;
+    let reach2 = near_reach * near_reach;
     let indirect: Vec3 = picked
         .map(|j| &light.vpls[j])
         .filter(|v| !v.near || (v.position - y.x).length_squared() <= reach2)

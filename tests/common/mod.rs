@@ -64,14 +64,26 @@ pub fn gpu_frame(scene: &irad::scene::Scene, size: u32, vpls: u32) -> Hdr {
 
 /// Frame 0 of `scene` path-traced at `size` x `size` with `spp` samples a pixel, seed 1.
 pub fn reference_frame(scene: &irad::scene::Scene, size: u32, spp: u32) -> Hdr {
+    reference_capped_from(scene, size, spp, 1, irad::reference::RR_CAP_DEPTH)
+}
+
+/// A reference of `scene` (`size` x `size`, `spp` samples a pixel, seed `seed`) whose
+/// roulette is capped from bounce `rr_cap_depth` on (`ReferenceSettings::rr_cap_depth`).
+pub fn reference_capped_from(
+    scene: &irad::scene::Scene,
+    size: u32,
+    spp: u32,
+    seed: u64,
+    rr_cap_depth: u32,
+) -> Hdr {
     let f = scene.at(0.0);
     let t = irad::trace::Tracer::new(&f);
     let s = irad::reference::ReferenceSettings {
         width: size,
         height: size,
         spp,
-        seed: 1,
-        ..Default::default()
+        seed,
+        rr_cap_depth,
     };
     irad::reference::render(&f, &t, &s, &|| {})
 }

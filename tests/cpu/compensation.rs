@@ -35,7 +35,6 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
         samples: &samples,
         vpls: &vpls,
         clamp,
-        near_reach: f32::INFINITY,
     };
     let (w, h) = (24, 24);
     let points = twin::pixel_points(&f, &t, w, h);

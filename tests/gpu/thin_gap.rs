@@ -293,10 +293,7 @@ fn sweep_against(
     for double in [true, false] {
         for gap in GAPS {
             let scene = common::quads::load(&cornell_with_gap(gap, double));
-            let r = match judge_cap_depth(gap) {
-                RR_CAP_DEPTH => common::reference_frame(&scene, size, spp),
-                cap => reference_capped_from(&scene, spp, 1, cap),
-            };
+            let r = common::reference_capped_from(&scene, size, spp, 1, judge_cap_depth(gap));
             let sides = if double { "double" } else { "single" };
             let errors: Vec<_> = seeds
                 .iter()
@@ -565,26 +562,6 @@ fn the_one_mm_rows_over_16_seeds() {
     }
 }
 
-/// A reference of `scene` (32 x 32, `spp` samples a pixel, seed `seed`) whose roulette is
-/// capped from bounce `rr_cap_depth` on (`ReferenceSettings::rr_cap_depth`).
-fn reference_capped_from(
-    scene: &irad::scene::Scene,
-    spp: u32,
-    seed: u64,
-    rr_cap_depth: u32,
-) -> irad::image::Hdr {
-    let f = scene.at(0.0);
-    let t = irad::trace::Tracer::new(&f);
-    let s = irad::reference::ReferenceSettings {
-        width: 32,
-        height: 32,
-        spp,
-        seed,
-        rr_cap_depth,
-    };
-    irad::reference::render(&f, &t, &s, &|| {})
-}
-
 /// The 1 cm and 1 mm rows against references that carry the gap's light (a measurement:
 /// `--ignored`; docs/math.md, "Light that cannot get out"). With roulette capped at 0.95 from
 /// bounce 3 (the default, as Mitsuba 3), the light that leaves a 1 cm gap after its median 35
@@ -602,10 +579,10 @@ fn the_wide_gaps_against_references_that_carry_the_gaps_light() {
         for double in [true, false] {
             let scene = common::quads::load(&cornell_with_gap(gap, double));
             let early: Vec<_> = (1..=2)
-                .map(|s| reference_capped_from(&scene, 8192, s, 3))
+                .map(|s| common::reference_capped_from(&scene, 32, 8192, s, 3))
                 .collect();
             let late: Vec<_> = (1..=4)
-                .map(|s| reference_capped_from(&scene, 8192, s, 256))
+                .map(|s| common::reference_capped_from(&scene, 32, 8192, s, 256))
                 .collect();
             let noise = |r: &[irad::image::Hdr]| irad::metrics::frame_error(&r[0], &r[1]).unwrap();
             let mut judge = late[0].clone();
@@ -697,7 +674,6 @@ fn the_light_inside_a_one_cm_gap_term_by_term() {
             samples: &samples,
             vpls: &vpls,
             clamp,
-            near_reach: f32::INFINITY,
         };
         for (k, s) in points.iter().enumerate() {
             let rho = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
