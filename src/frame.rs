@@ -148,10 +148,13 @@ impl Pipeline {
         let mut stages = Vec::new();
         let mut t = Instant::now();
         // 1. The scene at time t.
-        let frame = self.scene.at(time);
+        let mut frame = self.scene.at(time);
         lap(&mut stages, "scene", &mut t);
         // 2. Ray tracing: rebuild the BVH only if the geometry moved.
         let moved = self.tracer.update(&frame);
+        // Light from inside a closed lamp reaches nothing the frame shows: paths and emitter
+        // samples start only where it gets out (trace::solids).
+        frame.keep_emitters(|tri| !self.tracer.emits_inside_solid(tri));
         lap(&mut stages, "bvh", &mut t);
         // 3-6. Camera points, light paths, importance and the sampler: the frame's VPLs and
         // their weights (none for a classical method: its solution gives the indirect light).

@@ -397,6 +397,44 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Keeps only the emitter triangles `keep` accepts (by triangle index): their CDF, total
+    /// power and [`Frame::emitter_of_tri`] follow. Light paths and emitter samples are then
+    /// drawn among them alone, in proportion to their power. For the back-facing twins that
+    /// line a closed lamp's inside (`trace::solids`): their light reaches nothing the frame
+    /// shows, and drawn with the rest they took half of a double-sided closed lamp's paths
+    /// and direct-light samples. Returns how many were dropped.
+    pub fn keep_emitters(&mut self, keep: impl Fn(u32) -> bool) -> usize {
+        let em = &mut self.emitters;
+        let before = em.tris.len();
+        if em.tris.iter().all(|&t| keep(t)) {
+            return 0;
+        }
+        let (tris, power): (Vec<u32>, Vec<Vec3>) = em
+            .tris
+            .iter()
+            .zip(&em.power)
+            .filter(|(&t, _)| keep(t))
+            .map(|(&t, &p)| (t, p))
+            .unzip();
+        for &t in &em.tris {
+            self.emitter_of_tri[t as usize] = u32::MAX;
+        }
+        let mut acc = 0.0f32;
+        em.cdf.clear();
+        em.total_power = Vec3::ZERO;
+        for (k, (&t, &p)) in tris.iter().zip(&power).enumerate() {
+            self.emitter_of_tri[t as usize] = k as u32;
+            em.total_power += p;
+            acc += crate::math::luminance(p).max(1e-20);
+            em.cdf.push(acc);
+        }
+        for c in &mut em.cdf {
+            *c /= acc;
+        }
+        (em.tris, em.power) = (tris, power);
+        before - em.tris.len()
+    }
+
     /// The material's albedo factor (the mean albedo of an untextured triangle without vertex
     /// colours; [`Frame::albedo_at`] is the albedo at a point).
     pub fn albedo(&self, tri: usize) -> Vec3 {

@@ -105,3 +105,51 @@ fn kept_mean_emission_follows_the_materials() {
     );
     assert_eq!(power(&scene.clone()), doubled);
 }
+
+/// `Frame::keep_emitters` leaves a distribution over the kept emitters alone: each kept
+/// triangle drawn in proportion to its power (luminance), none of the others ever, its index
+/// in `emitter_of_tri`, and the total power theirs. Three single-sided emissive quads (no
+/// back-emitting twins) of strengths 1, 2 and 4, two triangles each; the middle one dropped.
+#[test]
+fn kept_emitters_are_drawn_in_proportion_to_their_power_alone() {
+    let mut q = Quads::default();
+    let grey = q.material(0.5, 0.0, true);
+    q.quad([0.; 3], [0., 0., 4.], [4., 0., 0.], grey, json!({}));
+    for (k, strength) in [1.0, 2.0, 4.0].into_iter().enumerate() {
+        let lamp = q.material(0.5, strength, false);
+        let x = -3.0 + 1.2 * k as f32;
+        q.quad([x, 2., 0.], [0.5, 0., 0.], [0., 0., 0.5], lamp, json!({}));
+    }
+    let mut f = load(&q.finish()).at(0.0);
+    let tris = f.emitters.tris.clone();
+    assert_eq!(tris.len(), 6, "two triangles a lamp");
+    let (materials, tri_material) = (f.materials.clone(), f.tri_material.clone());
+    let strength = |t: u32| materials[tri_material[t as usize] as usize].emission.x;
+    let dropped: Vec<u32> = tris
+        .iter()
+        .copied()
+        .filter(|&t| strength(t) == 2.0)
+        .collect();
+    let power = |f: &irad::scene::Frame| f.emitters.total_power.x;
+    let before = power(&f);
+    assert_eq!(f.keep_emitters(|t| !dropped.contains(&t)), 2);
+    let em = &f.emitters;
+    assert_eq!(em.tris.len(), 4);
+    assert!((power(&f) - before * 5.0 / 7.0).abs() < 1e-4 * before);
+    for &t in &dropped {
+        assert_eq!(f.emitter_of_tri[t as usize], u32::MAX);
+    }
+    let mut drawn = [0usize; 2];
+    let draws = 20000;
+    for j in 0..draws {
+        let (e, p) = em.pick((j as f32 + 0.5) / draws as f32);
+        let t = em.tris[e];
+        assert_eq!(f.emitter_of_tri[t as usize], e as u32);
+        let s = strength(t);
+        assert_ne!(s, 2.0, "a dropped emitter was drawn");
+        // Each triangle of a lamp of strength s: s / (2 * (1 + 4)) of the draws.
+        assert!((p - s / 10.0).abs() < 1e-5, "strength {s}: p {p}");
+        drawn[(s == 4.0) as usize] += 1;
+    }
+    assert_eq!(drawn, [draws / 5, draws * 4 / 5]);
+}

@@ -15,7 +15,8 @@
 //!
 //! Issue 23 item 1 sweeps the gap (1 cm to touching, double- and single-sided): light paths
 //! no longer live inside closed meshes (the lamp's back-emitting twins shone into it, and an
-//! offset through a gap thinner than itself put paths inside the ceiling), and a vertex in a
+//! offset through a gap thinner than itself put paths inside the ceiling), nor start there
+//! (the twins are left out of the emitters a frame draws from), and a vertex in a
 //! crevice keeps its VPL by a coin on how much of its lobe gets out (`vpl::crevice`); see
 //! docs/math.md, "Light that cannot get out".
 
@@ -342,7 +343,7 @@ const TEST: &str = "thin_gap";
 /// (`resolve::compensate`). Over seeds 1-4 the mean bias is within 5% at every gap, double- and
 /// single-sided. Before (at 386cd23, 3 seeds): double-sided +80% to +18822% (light paths
 /// inside the closed lamp and, through offsets, inside the ceiling); single-sided 1 mm relMSE
-/// 3.46. Without compensation (the test below) the double-sided rows are -3% to -14%.
+/// 3.46. Without compensation (the test below) the rows are -0.1% to -4.4%, and -21% at 1 cm.
 #[test]
 fn the_gap_sweep_against_the_reference() {
     let rows = sweep(
@@ -352,16 +353,17 @@ fn the_gap_sweep_against_the_reference() {
     );
     for (gap, double, e) in rows {
         let (mse, bias) = (largest_mse(&e), mean_bias(&e));
-        // Measured (docs/math.md, "Inside the 1 cm gap"): the mean bias -4.4% to +4.5%; the
-        // largest relMSE 0.038 at 0.1 mm and less, 0.106 and 0.110 at 1 mm (0.049 and 0.063
-        // before the crevices' VPLs were read by the compensation: a few of them, 16 times
-        // the power, light the mouth), 1.05 and 0.31 at 1 cm (whose judge, capped from bounce
-        // 256, differs from a second seed by relMSE 0.136 at 8192 spp: camera paths that find
-        // the gap's mouth, and 1024 VPLs from 270-430 light paths leave blotches).
-        let mse_bound = match (gap, double) {
-            (g, true) if g >= 0.01 => 1.5,
-            (g, false) if g >= 0.01 => 0.4,
-            (g, _) if g >= 0.001 => 0.12,
+        // Measured (docs/math.md, "Inside the 1 cm gap" and "A closed lamp's inside"): the
+        // mean bias -2.6% to +4.5%; the largest relMSE 0.037 at 0.1 mm and less, 0.117 and
+        // 0.110 at 1 mm (0.049 and 0.063 before the crevices' VPLs were read by the
+        // compensation: a few of them, 16 times the power, light the mouth), 0.31 at 1 cm
+        // both sides (1.05 double-sided while the lamp's inside took half the light paths;
+        // the judge, capped from bounce 256, differs from a second seed by relMSE 0.136 at
+        // 8192 spp: camera paths that find the gap's mouth; 1024 VPLs from 150-190 light
+        // paths leave blotches).
+        let mse_bound = match gap {
+            g if g >= 0.01 => 0.4,
+            g if g >= 0.001 => 0.12,
             _ => 0.05,
         };
         assert!(
@@ -383,17 +385,16 @@ fn the_gap_sweep_without_compensation() {
     );
     for (gap, double, e) in rows {
         let e = &e[0];
-        // Measured with seed 1: the table in docs/math.md (seed 2 within these too). The 1 cm
-        // gap's reference (capped from bounce 256, `judge_cap_depth`) is itself noisy (camera
-        // paths that find the gap) and the VPLs' mean is below it (-25.1% and -21.3%: the
-        // camera sees into the gap's mouth, whose inside the clamped gather cannot light; see
-        // docs/math.md).
-        let (mse, bias) = match (gap, double) {
-            (g, _) if g >= 0.01 => (0.35, 0.28),
-            (g, true) if g >= 1e-4 => (0.065, 0.13),
-            (_, true) => (0.045, 0.085),
-            (g, false) if g >= 0.001 => (0.08, 0.065),
-            _ => (0.04, 0.04),
+        // Measured with seed 1 (docs/math.md): both sides alike now that the double-sided
+        // lamp's inside starts no light path. The 1 cm gap's reference (capped from bounce
+        // 256, `judge_cap_depth`) is itself noisy (camera paths that find the gap) and the
+        // VPLs' mean is below it (-21.4% and -21.3%: the camera sees into the gap's mouth,
+        // whose inside the clamped gather cannot light); relMSE 0.248 and 0.249. At 1 mm
+        // 0.065 and 0.063, -4.4% both; below, at most 0.027 and -4.3%.
+        let (mse, bias) = match gap {
+            g if g >= 0.01 => (0.3, 0.25),
+            g if g >= 0.001 => (0.075, 0.06),
+            _ => (0.035, 0.05),
         };
         assert!(
             e.rel_mse <= mse && e.rel_bias.abs() <= bias,
@@ -479,6 +480,41 @@ fn light_paths_live_in_a_closed_box_only_when_the_camera_is_inside() {
         })
         .count();
     assert_eq!(in_lamp, 0, "{in_lamp} of {} VPLs inside the lamp", v.len());
+}
+
+/// A frame's light paths start only where a closed lamp's light gets out: the sweep's
+/// double-sided lamp (a closed slab, `doubleSided: true`) has a back-emitting twin under each
+/// face that shines into it (`trace::solids`). Drawn in proportion to power with the rest,
+/// the twins took half of the paths, which ended at once, and half of the direct light's
+/// samples (`Frame::keep_emitters` now leaves them out). Of the paths the uniform sampler
+/// draws for 1024 VPLs, 0.885-0.942 leave a VPL (seeds 1-4; the rest leave the box through
+/// its open front or end on a crevice's coin); before, 0.425-0.490.
+#[test]
+fn a_closed_lamps_light_paths_start_outside_it() {
+    let scene = common::quads::load(&cornell_with_gap(0.01, true));
+    for seed in 1..=4 {
+        let mut cfg = common::render_config();
+        cfg.sequence.size = irad::config::Size {
+            width: 32,
+            height: 32,
+        };
+        cfg.vpls = 1024;
+        cfg.sampler.kind = irad::vpl::sampler::SamplerKind::Uniform;
+        cfg.sequence.seed = seed;
+        cfg.quality.compensate = Compensate::Paths(0);
+        cfg.backend = common::backend();
+        let gpu = std::sync::Arc::new(irad::gpu::Gpu::new(cfg.backend).unwrap());
+        let mut p = irad::frame::Pipeline::new(gpu, scene.clone(), &cfg).unwrap();
+        let sel = p.render_frame(0, false).unwrap().selection;
+        let lit: std::collections::BTreeSet<u64> = sel.vpls.iter().map(|v| v.path).collect();
+        let share = lit.len() as f64 / sel.paths as f64;
+        assert!(
+            share >= 0.8,
+            "seed {seed}: {} of {} paths left a VPL ({share:.3})",
+            lit.len(),
+            sel.paths
+        );
+    }
 }
 
 /// Every lamp of the sweep sends more than `resolve::NEAR_FIELD_SHARE` of its light into the
