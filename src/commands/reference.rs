@@ -63,17 +63,21 @@ pub fn trace_walking(
     let p = seq.reference_settings(sampling);
     let mut tracer: Option<Tracer> = None;
     for f in walk {
-        let frame = scene.at(seq.time(f));
-        match &mut tracer {
+        let mut frame = scene.at(seq.time(f));
+        let tracer = match &mut tracer {
             Some(t) => {
                 t.update(&frame);
+                t
             }
-            None => tracer = Some(Tracer::new(&frame)),
-        }
+            None => tracer.insert(Tracer::new(&frame)),
+        };
         if !wanted(f) {
             continue;
         }
-        let img = crate::reference::render(&frame, tracer.as_ref().expect("set above"), &p, tick);
+        // Next-event estimation draws among the emitters whose light gets out, as the
+        // renderer's frames do (not a closed lamp's back-emitting twins: trace::solids).
+        frame.keep_emitters(|tri| !tracer.emits_inside_solid(tri));
+        let img = crate::reference::render(&frame, tracer, &p, tick);
         done(f, frame.time, img)?;
     }
     Ok(())

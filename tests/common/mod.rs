@@ -76,8 +76,10 @@ pub fn reference_capped_from(
     seed: u64,
     rr_cap_depth: u32,
 ) -> Hdr {
-    let f = scene.at(0.0);
+    let mut f = scene.at(0.0);
     let t = irad::trace::Tracer::new(&f);
+    // As `irad reference` draws its emitter samples (commands::reference).
+    f.keep_emitters(|tri| !t.emits_inside_solid(tri));
     let s = irad::reference::ReferenceSettings {
         width: size,
         height: size,
