@@ -45,6 +45,44 @@ pub struct Light<'a> {
     pub clamp: f32,
 }
 
+/// The VPLs by cell of a uniform grid, so that those near a point are found without looking
+/// at the rest: a compensation path's vertex reads every VPL within a cell of it (inside a
+/// crevice nearly all of its light comes from those) and a subset of the others.
+pub struct Nearby {
+    cell: f32,
+    cells: std::collections::HashMap<[i32; 3], Vec<u32>>,
+}
+
+impl Nearby {
+    /// `vpls` by cells of the crevices' reach ([`crate::vpl::crevice::REACH`] of the scene's
+    /// size).
+    pub fn new(vpls: &[ShadedVpl], tracer: &Tracer) -> Nearby {
+        let cell = crate::vpl::crevice::REACH * tracer.size();
+        let mut cells: std::collections::HashMap<[i32; 3], Vec<u32>> = Default::default();
+        for (i, v) in vpls.iter().enumerate() {
+            cells
+                .entry(Self::key(v.position, cell))
+                .or_default()
+                .push(i as u32);
+        }
+        Nearby { cell, cells }
+    }
+
+    fn key(x: Vec3, cell: f32) -> [i32; 3] {
+        let k = (x / cell).floor();
+        [k.x as i32, k.y as i32, k.z as i32]
+    }
+
+    /// The indices of the VPLs in the cells around `x` (all those within one cell of it).
+    fn around(&self, x: Vec3) -> impl Iterator<Item = u32> + '_ {
+        let [a, b, c] = Self::key(x, self.cell);
+        (0..27).flat_map(move |k| {
+            let key = [a + k % 3 - 1, b + (k / 3) % 3 - 1, c + k / 9 - 1];
+            self.cells.get(&key).into_iter().flatten().copied()
+        })
+    }
+}
+
 /// Bounces a compensation path takes at most (light that stays within the clamp of the
 /// surfaces it meets for longer is lost).
 pub const MAX_BOUNCES: u32 = 256;
@@ -75,6 +113,7 @@ pub fn compensate(
         clamp: light.clamp,
     };
     let reach = crate::vpl::crevice::REACH * tracer.size();
+    let nearby = Nearby::new(light.vpls, tracer);
     (0..(width * height) as usize)
         .into_par_iter()
         .filter_map(|i| {
@@ -97,10 +136,17 @@ pub fn compensate(
                 };
                 let s = SurfacePoint::seen(frame, &h, d);
                 let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
-                sum += path(frame, tracer, &s, light, (u, MAX_BOUNCES), &mut r);
+                sum += path(
+                    frame,
+                    tracer,
+                    &s,
+                    (light, &nearby),
+                    (u, MAX_BOUNCES),
+                    &mut r,
+                );
                 if !near.vpls.is_empty() {
                     let subset = (r.random(), 0, VPLS_AT_HIT);
-                    sum += reflected(frame, tracer, &s, &near, subset, reach);
+                    sum += reflected(frame, tracer, &s, (&near, None), subset, reach);
                 }
             }
             (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
@@ -109,12 +155,13 @@ pub fn compensate(
 }
 
 /// One estimate of `L_c` at surface point `s`: a path of at most `bounces` bounces (1: the
-/// first-order term alone) whose first direction is `u` on the hemisphere's square.
+/// first-order term alone) whose first direction is `u` on the hemisphere's square; `nearby`
+/// holds `light`'s VPLs.
 pub fn path(
     frame: &Frame,
     tracer: &Tracer,
     s: &SurfacePoint,
-    light: &Light,
+    (light, nearby): (&Light, &Nearby),
     (u, bounces): (Vec2, u32),
     r: &mut impl Rng,
 ) -> Vec3 {
@@ -146,7 +193,15 @@ pub fn path(
             (1, VPLS_LATER)
         };
         let subset = (r.random(), samples, vpls);
-        sum += beta * (le + reflected(frame, tracer, &y, light, subset, f32::INFINITY));
+        let l = reflected(
+            frame,
+            tracer,
+            &y,
+            (light, Some(nearby)),
+            subset,
+            f32::INFINITY,
+        );
+        sum += beta * (le + l);
         let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
         beta *= rho;
         let q = beta.max_element().min(ROULETTE);
@@ -170,13 +225,14 @@ const VPLS_LATER: usize = 4;
 /// The light reflected at `y` (direct from `samples` of the emitter samples, clamped as the
 /// direct pass clamps points on emitter triangles, and indirect from a stratified subset of
 /// `vpls` VPLs starting at fraction `u` of them, clamped), with exact visibility; a subset
-/// stands for the whole by its share. A crevice's VPL ([`crate::vpl::Vpl::near`]) farther
-/// than `near_reach` from `y` gives nothing.
+/// stands for the whole by its share. With `nearby` (the grid of `light`'s VPLs), every VPL
+/// within a cell of `y` is read and the subset stands for the others alone. A crevice's VPL
+/// ([`crate::vpl::Vpl::near`]) farther than `near_reach` from `y` gives nothing.
 fn reflected(
     frame: &Frame,
     tracer: &Tracer,
     y: &SurfacePoint,
-    light: &Light,
+    (light, nearby): (&Light, Option<&Nearby>),
     (u, samples, vpls): (f32, usize, usize),
     near_reach: f32,
 ) -> Vec3 {
@@ -212,17 +268,35 @@ fn reflected(
         return direct;
     }
     let reach2 = near_reach * near_reach;
+    let seen = |v: &ShadedVpl| {
+        let c = v.radiance_at(y.x, y.n, rho, light.clamp);
+        if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {
+            Vec3::ZERO
+        } else {
+            c
+        }
+    };
+    if let (Some(g), true) = (nearby, m < n) {
+        // Those within a cell of `y`, every one; the others by the subset, standing for theirs.
+        let r2 = g.cell * g.cell;
+        let close = |v: &ShadedVpl| (v.position - y.x).length_squared() <= r2;
+        let exact: Vec3 = g
+            .around(y.x)
+            .map(|j| &light.vpls[j as usize])
+            .filter(|v| close(v) && (!v.near || (v.position - y.x).length_squared() <= reach2))
+            .map(seen)
+            .sum();
+        let far: Vec3 = picked
+            .map(|j| &light.vpls[j])
+            .filter(|v| !close(v) && (!v.near || (v.position - y.x).length_squared() <= reach2))
+            .map(seen)
+            .sum();
+        return direct + exact + far * (n as f32 / m as f32);
+    }
     let indirect: Vec3 = picked
         .map(|j| &light.vpls[j])
         .filter(|v| !v.near || (v.position - y.x).length_squared() <= reach2)
-        .map(|v| {
-            let c = v.radiance_at(y.x, y.n, rho, light.clamp);
-            if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {
-                Vec3::ZERO
-            } else {
-                c
-            }
-        })
+        .map(seen)
         .sum();
     direct + indirect * (n as f32 / m as f32)
 }

@@ -5,7 +5,7 @@
 //! the box's edges and corners; the compensation's paths must give back the rest, and its
 //! later bounces (the light the clamp took from the surfaces the rays land on) must count.
 
-use irad::compensation::{path, Light, MAX_BOUNCES};
+use irad::compensation::{path, Light, Nearby, MAX_BOUNCES};
 use irad::math::luminance;
 use irad::reference::twin;
 use irad::scene::SampleKind;
@@ -36,6 +36,7 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
         vpls: &vpls,
         clamp,
     };
+    let nearby = Nearby::new(&vpls, &t);
     let (w, h) = (24, 24);
     let points = twin::pixel_points(&f, &t, w, h);
     let indirect = twin::gather(&f, &t, &points, w, h, &vpls, clamp);
@@ -59,7 +60,7 @@ fn clamped_light_plus_compensation_is_the_furnace_s_exact_light() {
         for _ in 0..paths {
             let u = glam::Vec2::new(r.random(), r.random());
             for (k, bounces) in [1, MAX_BOUNCES].into_iter().enumerate() {
-                c[k] += luminance(path(&f, &t, s, &light, (u, bounces), &mut r)) as f64;
+                c[k] += luminance(path(&f, &t, s, (&light, &nearby), (u, bounces), &mut r)) as f64;
             }
         }
         if c[1] == 0.0 {
