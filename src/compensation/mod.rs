@@ -50,7 +50,7 @@ pub struct Light<'a> {
 /// crevice nearly all of its light comes from those) and a subset of the others.
 pub struct Nearby {
     cell: f32,
-    cells: std::collections::HashMap<[i32; 3], Vec<u32>>,
+    cells: std::collections::HashMap<[i64; 3], Vec<u32>>,
 }
 
 impl Nearby {
@@ -58,7 +58,7 @@ impl Nearby {
     /// size).
     pub fn new(vpls: &[ShadedVpl], tracer: &Tracer) -> Nearby {
         let cell = crate::vpl::crevice::REACH * tracer.size();
-        let mut cells: std::collections::HashMap<[i32; 3], Vec<u32>> = Default::default();
+        let mut cells: std::collections::HashMap<[i64; 3], Vec<u32>> = Default::default();
         for (i, v) in vpls.iter().enumerate() {
             cells
                 .entry(Self::key(v.position, cell))
@@ -68,18 +68,51 @@ impl Nearby {
         Nearby { cell, cells }
     }
 
-    fn key(x: Vec3, cell: f32) -> [i32; 3] {
-        let k = (x / cell).floor();
-        [k.x as i32, k.y as i32, k.z as i32]
+    /// The cell of `x` (saturated far beyond anything f32 resolves at this cell size).
+    fn key(x: Vec3, cell: f32) -> [i64; 3] {
+        (x.as_dvec3() / cell as f64)
+            .floor()
+            .to_array()
+            .map(|k| k as i64)
     }
 
-    /// The indices of the VPLs in the cells around `x` (all those within one cell of it).
-    fn around(&self, x: Vec3) -> impl Iterator<Item = u32> + '_ {
+    /// The cells around `x`'s, each once.
+    fn keys_around(&self, x: Vec3) -> Vec<[i64; 3]> {
         let [a, b, c] = Self::key(x, self.cell);
-        (0..27).flat_map(move |k| {
-            let key = [a + k % 3 - 1, b + (k / 3) % 3 - 1, c + k / 9 - 1];
-            self.cells.get(&key).into_iter().flatten().copied()
-        })
+        let mut keys: Vec<[i64; 3]> = (0..27i64)
+            .map(|k| {
+                let d = [k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1];
+                [
+                    a.saturating_add(d[0]),
+                    b.saturating_add(d[1]),
+                    c.saturating_add(d[2]),
+                ]
+            })
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        keys
+    }
+
+    /// Whether `p` lies in one of the cells around `x`'s and within a cell of `x`: the VPLs
+    /// [`Nearby::close_to`] gives.
+    fn is_close(&self, x: Vec3, p: Vec3) -> bool {
+        let (kx, kp) = (Self::key(x, self.cell), Self::key(p, self.cell));
+        let near = (0..3).all(|i| (kx[i] as i128 - kp[i] as i128).abs() <= 1);
+        near && (p - x).length_squared() <= self.cell * self.cell
+    }
+
+    /// The indices of the VPLs within a cell of `x` ([`Nearby::is_close`]).
+    fn close_to<'a>(
+        &'a self,
+        x: Vec3,
+        vpls: &'a [ShadedVpl],
+    ) -> impl Iterator<Item = &'a ShadedVpl> + 'a {
+        self.keys_around(x)
+            .into_iter()
+            .flat_map(move |k| self.cells.get(&k).into_iter().flatten())
+            .map(move |&j| &vpls[j as usize])
+            .filter(move |v| self.is_close(x, v.position))
     }
 }
 
@@ -277,18 +310,14 @@ fn reflected(
         }
     };
     if let (Some(g), true) = (nearby, m < n) {
-        // Those within a cell of `y`, every one; the others by the subset, standing for theirs.
-        let r2 = g.cell * g.cell;
-        let close = |v: &ShadedVpl| (v.position - y.x).length_squared() <= r2;
-        let exact: Vec3 = g
-            .around(y.x)
-            .map(|j| &light.vpls[j as usize])
-            .filter(|v| close(v) && (!v.near || (v.position - y.x).length_squared() <= reach2))
-            .map(seen)
-            .sum();
+        // Those within a cell of `y`, every one; the others by the subset, standing for theirs
+        // (the two sets part the VPLs exactly: `Nearby::is_close`).
+        let reaches = |v: &&ShadedVpl| !v.near || (v.position - y.x).length_squared() <= reach2;
+        let exact: Vec3 = g.close_to(y.x, light.vpls).filter(reaches).map(seen).sum();
         let far: Vec3 = picked
             .map(|j| &light.vpls[j])
-            .filter(|v| !close(v) && (!v.near || (v.position - y.x).length_squared() <= reach2))
+            .filter(|v| !g.is_close(y.x, v.position))
+            .filter(reaches)
             .map(seen)
             .sum();
         return direct + exact + far * (n as f32 / m as f32);
@@ -334,5 +363,57 @@ pub fn near_field_share(frame: &Frame, tracer: &Tracer, clamp: f32) -> f32 {
         0.0
     } else {
         near as f32 / area as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::rng;
+
+    /// The VPLs a vertex reads one by one (`close_to`) are exactly those within a cell of it,
+    /// and the subset's test (`is_close`) leaves out exactly those: near the origin, across
+    /// cell boundaries, and where the coordinates are far beyond the cells' reach (1e30 with
+    /// cells of 0.04: the keys saturate, and no VPL may be read twice or by both).
+    #[test]
+    fn the_nearby_vpls_and_the_others_part_the_vpls() {
+        let frame = crate::scene::builtin::load("cornell")
+            .unwrap()
+            .unwrap()
+            .at(0.0);
+        let tracer = Tracer::new(&frame);
+        let mut r = rng(&[5]);
+        for centre in [Vec3::ZERO, Vec3::splat(0.02), Vec3::new(1e30, -1e30, 3.0)] {
+            let vpls: Vec<ShadedVpl> = (0..2000)
+                .map(|_| ShadedVpl {
+                    position: centre + Vec3::new(r.random(), r.random(), r.random()) * 0.3
+                        - Vec3::splat(0.15),
+                    normal: Vec3::Y,
+                    flux: Vec3::ONE,
+                    near: false,
+                })
+                .collect();
+            let g = Nearby::new(&vpls, &tracer);
+            let cell = g.cell;
+            assert!(cell > 0.01 && cell < 0.1, "cell {cell}");
+            for _ in 0..50 {
+                let x =
+                    centre + Vec3::new(r.random(), r.random(), r.random()) * 0.2 - Vec3::splat(0.1);
+                let found: Vec<*const ShadedVpl> =
+                    g.close_to(x, &vpls).map(|v| v as *const _).collect();
+                let mut unique = found.clone();
+                unique.sort();
+                unique.dedup();
+                assert_eq!(unique.len(), found.len(), "a VPL read twice near {x}");
+                for v in &vpls {
+                    let is = g.is_close(x, v.position);
+                    assert_eq!(found.contains(&(v as *const _)), is);
+                    if centre == Vec3::ZERO || centre.x == 0.02 {
+                        let within = (v.position - x).length_squared() <= cell * cell;
+                        assert_eq!(is, within, "{} from {x}", v.position);
+                    }
+                }
+            }
+        }
     }
 }
