@@ -365,7 +365,7 @@ const TEST: &str = "thin_gap";
 /// (`resolve::compensate`). Over seeds 1-4 the mean bias is within 5% at every gap, double- and
 /// single-sided. Before (at 386cd23, 3 seeds): double-sided +80% to +18822% (light paths
 /// inside the closed lamp and, through offsets, inside the ceiling); single-sided 1 mm relMSE
-/// 3.46. Without compensation (the test below) the rows are -0.1% to -4.4%, and -21% at 1 cm.
+/// 3.46. Without compensation (the test below) the rows are -0.1% to -4.4%, and -22% at 1 cm.
 #[test]
 fn the_gap_sweep_against_the_reference() {
     let rows = sweep(
@@ -379,8 +379,9 @@ fn the_gap_sweep_against_the_reference() {
         // VPL near a compensation vertex"): the mean bias -2.0% to +4.6%; the largest relMSE
         // 0.036 at 0.1 mm and less, 0.108 and 0.113 at 1 mm (0.049 and 0.063 before the
         // crevices' VPLs were read by the compensation: a few of them, 16 times the power,
-        // light the mouth), 0.084 and 0.080 at 1 cm against its converged judge (`judge`; 1024 VPLs from 150-190 light paths
-        // leave blotches, and the mouth takes its light from a few crevice VPLs).
+        // light the mouth), 0.084 and 0.080 at 1 cm against its converged judge (`judge`;
+        // 1024 VPLs from 150-190 light paths leave blotches, and the mouth takes its light
+        // from a few crevice VPLs).
         let mse_bound = match gap {
             g if g >= 0.01 => 0.09,
             g if g >= 0.001 => 0.12,
