@@ -154,7 +154,7 @@ impl Pipeline {
         let moved = self.tracer.update(&frame);
         // Light from inside a closed lamp reaches nothing the frame shows: paths and emitter
         // samples start only where it gets out (trace::solids).
-        frame.keep_emitters(|tri| !self.tracer.emits_inside_solid(tri));
+        self.tracer.keep_lit_emitters(&mut frame);
         lap(&mut stages, "bvh", &mut t);
         // 3-6. Camera points, light paths, importance and the sampler: the frame's VPLs and
         // their weights (none for a classical method: its solution gives the indirect light).

@@ -76,7 +76,7 @@ pub fn trace_walking(
         }
         // Next-event estimation draws among the emitters whose light gets out, as the
         // renderer's frames do (not a closed lamp's back-emitting twins: trace::solids).
-        frame.keep_emitters(|tri| !tracer.emits_inside_solid(tri));
+        tracer.keep_lit_emitters(&mut frame);
         let img = crate::reference::render(&frame, tracer, &p, tick);
         done(f, frame.time, img)?;
     }

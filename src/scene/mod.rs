@@ -292,6 +292,28 @@ pub struct Emitters {
 }
 
 impl Emitters {
+    /// Makes `tris` (with their `power`) the emitter triangles: the CDF in proportion to
+    /// luminance power, the total power, and each one's index in `emitter_of_tri` (the
+    /// frame's, whose entries for the triangles that were emitters are cleared first).
+    fn set_triangles(&mut self, tris: Vec<u32>, power: Vec<Vec3>, emitter_of_tri: &mut [u32]) {
+        for &t in &self.tris {
+            emitter_of_tri[t as usize] = u32::MAX;
+        }
+        let mut acc = 0.0f32;
+        self.cdf.clear();
+        self.total_power = Vec3::ZERO;
+        for (k, (&t, &p)) in tris.iter().zip(&power).enumerate() {
+            emitter_of_tri[t as usize] = k as u32;
+            self.total_power += p;
+            acc += crate::math::luminance(p).max(1e-20);
+            self.cdf.push(acc);
+        }
+        for c in &mut self.cdf {
+            *c /= acc;
+        }
+        (self.tris, self.power) = (tris, power);
+    }
+
     /// Picks an emitter by a uniform number: (index into `tris`, probability).
     pub fn pick(&self, u: f32) -> (usize, f32) {
         let i = self
@@ -416,22 +438,7 @@ impl Frame {
             .filter(|(&t, _)| keep(t))
             .map(|(&t, &p)| (t, p))
             .unzip();
-        for &t in &em.tris {
-            self.emitter_of_tri[t as usize] = u32::MAX;
-        }
-        let mut acc = 0.0f32;
-        em.cdf.clear();
-        em.total_power = Vec3::ZERO;
-        for (k, (&t, &p)) in tris.iter().zip(&power).enumerate() {
-            self.emitter_of_tri[t as usize] = k as u32;
-            em.total_power += p;
-            acc += crate::math::luminance(p).max(1e-20);
-            em.cdf.push(acc);
-        }
-        for c in &mut em.cdf {
-            *c /= acc;
-        }
-        (em.tris, em.power) = (tris, power);
+        em.set_triangles(tris, power, &mut self.emitter_of_tri);
         before - em.tris.len()
     }
 
@@ -912,7 +919,6 @@ impl Scene {
             instances,
         };
         let mut emitters = Emitters::default();
-        let mut acc = 0.0f32;
         // Where emission varies over triangles (textures, cutouts) their means are kept
         // between frames; elsewhere each is its material's factor.
         let varies = frame.attrs.is_some()
@@ -921,24 +927,18 @@ impl Scene {
                     && (m.emissive_texture.is_some() || m.alpha_cutoff.is_some())
             });
         let means = varies.then(|| self.emission_means.of(&frame));
+        let (mut tris, mut power) = (Vec::new(), Vec::new());
         for i in 0..frame.tris.len() {
             let le = match &means {
                 Some(m) => m[i],
                 None => frame.materials[frame.tri_material[i] as usize].emission,
             };
             if le.max_element() > 0.0 && frame.areas[i] > 0.0 {
-                let power = le * std::f32::consts::PI * frame.areas[i];
-                frame.emitter_of_tri[i] = emitters.tris.len() as u32;
-                emitters.tris.push(i as u32);
-                emitters.power.push(power);
-                emitters.total_power += power;
-                acc += crate::math::luminance(power).max(1e-20);
-                emitters.cdf.push(acc);
+                tris.push(i as u32);
+                power.push(le * std::f32::consts::PI * frame.areas[i]);
             }
         }
-        for c in &mut emitters.cdf {
-            *c /= acc;
-        }
+        emitters.set_triangles(tris, power, &mut frame.emitter_of_tri);
         let (lo, hi) = frame.bounds();
         emitters.sphere = if frame.tris.is_empty() {
             (Vec3::ZERO, 1.0)

@@ -312,6 +312,13 @@ impl Tracer {
         self.solids.as_ref().is_some_and(|s| s.emits_inside(tri))
     }
 
+    /// Leaves out of `frame`'s emitters those that shine into a solid the camera is outside
+    /// of (a closed lamp's back-emitting twins), so that light paths and emitter samples start
+    /// only where their light gets out ([`Frame::keep_emitters`]); how many it left out.
+    pub fn keep_lit_emitters(&self, frame: &mut Frame) -> usize {
+        frame.keep_emitters(|tri| !self.emits_inside_solid(tri))
+    }
+
     fn intersect_facing(&self, origin: Vec3, dir: Vec3, tmax: f32, facing: Facing) -> Option<Hit> {
         // In the BVH's coordinates (the frame's times k, exactly).
         let origin = origin * self.k;

@@ -79,7 +79,7 @@ pub fn reference_capped_from(
     let mut f = scene.at(0.0);
     let t = irad::trace::Tracer::new(&f);
     // As `irad reference` draws its emitter samples (commands::reference).
-    f.keep_emitters(|tri| !t.emits_inside_solid(tri));
+    t.keep_lit_emitters(&mut f);
     let s = irad::reference::ReferenceSettings {
         width: size,
         height: size,

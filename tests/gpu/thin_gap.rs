@@ -723,7 +723,7 @@ fn the_light_inside_a_one_cm_gap_term_by_term() {
     let clamp = params.clamp;
     // The frame the pipeline draws from (Frame::keep_emitters).
     let mut lit = frame.clone();
-    lit.keep_emitters(|t| !tracer.emits_inside_solid(t));
+    tracer.keep_lit_emitters(&mut lit);
     // Per point and term: the sum over seeds and the sum of squares.
     let mut terms = vec![[(0.0f64, 0.0f64); 3]; probes.len()];
     for seed in 1..=seeds {
