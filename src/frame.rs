@@ -175,8 +175,8 @@ impl Pipeline {
         // next to a surface, which the point set leaves full of holes).
         // The VPLs the GPU gathers: all but those the compensation alone reads (vpl::crevice).
         let gathered: std::borrow::Cow<[crate::vpl::ShadedVpl]> =
-            if selection.shaded.iter().any(|v| v.near) {
-                let kept = selection.shaded.iter().filter(|v| !v.near);
+            if selection.shaded.iter().any(|v| v.near.is_some()) {
+                let kept = selection.shaded.iter().filter(|v| v.near.is_none());
                 kept.copied().collect::<Vec<_>>().into()
             } else {
                 selection.shaded.as_slice().into()

@@ -136,16 +136,20 @@ pub fn compensate(
     }
     // The VPLs the GPU's gather leaves out (`vpl::crevice`): their clamped light at the point
     // a sub-sample sees is added here, as the gather adds the others'.
-    let near: Vec<ShadedVpl> = light.vpls.iter().filter(|v| v.near).copied().collect();
+    let near: Vec<ShadedVpl> = light
+        .vpls
+        .iter()
+        .filter(|v| v.near.is_some())
+        .copied()
+        .collect();
     // At the point a pixel sees, a crevice's VPL lights only the neighbourhood its rays found
     // closed (vpl::crevice): what reaches farther, out of the crevice, is what its coin left
-    // out before.
+    // out.
     let near = Light {
         samples: &[],
         vpls: &near,
         clamp: light.clamp,
     };
-    let reach = crate::vpl::crevice::REACH * tracer.size();
     let nearby = Nearby::new(light.vpls, tracer);
     (0..(width * height) as usize)
         .into_par_iter()
@@ -179,7 +183,7 @@ pub fn compensate(
                 );
                 if !near.vpls.is_empty() {
                     let subset = (r.random(), 0, VPLS_AT_HIT);
-                    sum += reflected(frame, tracer, &s, (&near, None), subset, reach);
+                    sum += reflected(frame, tracer, &s, (&near, None), subset, true);
                 }
             }
             (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
@@ -226,14 +230,7 @@ pub fn path(
             (1, VPLS_LATER)
         };
         let subset = (r.random(), samples, vpls);
-        let l = reflected(
-            frame,
-            tracer,
-            &y,
-            (light, Some(nearby)),
-            subset,
-            f32::INFINITY,
-        );
+        let l = reflected(frame, tracer, &y, (light, Some(nearby)), subset, false);
         sum += beta * (le + l);
         let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
         beta *= rho;
@@ -259,15 +256,16 @@ const VPLS_LATER: usize = 4;
 /// direct pass clamps points on emitter triangles, and indirect from a stratified subset of
 /// `vpls` VPLs starting at fraction `u` of them, clamped), with exact visibility; a subset
 /// stands for the whole by its share. With `nearby` (the grid of `light`'s VPLs), every VPL
-/// within a cell of `y` is read and the subset stands for the others alone. A crevice's VPL
-/// ([`crate::vpl::Vpl::near`]) farther than `near_reach` from `y` gives nothing.
+/// within a cell of `y` is read and the subset stands for the others alone. With `at_pixel`
+/// (`y` is the point a pixel sees), a crevice's VPL ([`crate::vpl::Vpl::near`]) farther from
+/// `y` than its light reaches gives nothing.
 fn reflected(
     frame: &Frame,
     tracer: &Tracer,
     y: &SurfacePoint,
     (light, nearby): (&Light, Option<&Nearby>),
     (u, samples, vpls): (f32, usize, usize),
-    near_reach: f32,
+    at_pixel: bool,
 ) -> Vec3 {
     let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
     let clamp2 = light.clamp * light.clamp;
@@ -300,7 +298,11 @@ fn reflected(
     if m == 0 {
         return direct;
     }
-    let reach2 = near_reach * near_reach;
+    let reaches = |v: &&ShadedVpl| {
+        !at_pixel
+            || v.near
+                .is_none_or(|r| (v.position - y.x).length_squared() <= r * r)
+    };
     let seen = |v: &ShadedVpl| {
         let c = v.radiance_at(y.x, y.n, rho, light.clamp);
         if c == Vec3::ZERO || tracer.occluded(y.x, y.n, v.position, v.normal) {
@@ -312,7 +314,6 @@ fn reflected(
     if let (Some(g), true) = (nearby, m < n) {
         // Those within a cell of `y`, every one; the others by the subset, standing for theirs
         // (the two sets part the VPLs exactly: `Nearby::is_close`).
-        let reaches = |v: &&ShadedVpl| !v.near || (v.position - y.x).length_squared() <= reach2;
         let exact: Vec3 = g.close_to(y.x, light.vpls).filter(reaches).map(seen).sum();
         let far: Vec3 = picked
             .map(|j| &light.vpls[j])
@@ -324,7 +325,7 @@ fn reflected(
     }
     let indirect: Vec3 = picked
         .map(|j| &light.vpls[j])
-        .filter(|v| !v.near || (v.position - y.x).length_squared() <= reach2)
+        .filter(reaches)
         .map(seen)
         .sum();
     direct + indirect * (n as f32 / m as f32)
@@ -390,7 +391,7 @@ mod tests {
                         - Vec3::splat(0.15),
                     normal: Vec3::Y,
                     flux: Vec3::ONE,
-                    near: false,
+                    near: None,
                 })
                 .collect();
             let g = Nearby::new(&vpls, &tracer);

@@ -21,6 +21,15 @@
 //! VPLs of its later vertices. Unbiased for every vertex (the coin's probability is divided
 //! out), but for the light of a crevice's VPL that reaches a pixel's point beyond the reach.
 //!
+//! A vertex with a ray out but fewer than a quarter, none of whose rays ends beyond [`FAR`]
+//! reaches (deep in a 1 cm gap, where only grazing rays get past the reach), lights the
+//! crevice and its surroundings alone: it too is the compensation's, read at a pixel's point
+//! within `FAR` reaches, and the GPU's slots go to VPLs that light the room (a frame's slots
+//! count the VPLs the GPU gathers: `sampler::common::paths_by`). And a light path goes on from
+//! a crevice's vertex without Russian roulette on an albedo of 1 ([`Coin::crevice`]): the
+//! light there has no way but out, and ended at 0.99 a bounce it came out on the few paths
+//! that lived, weighted 1/0.99 a bounce (docs/math.md, "The room's slots").
+//!
 //! The rays and the coin draw from a stream of their own, seeded by (seed, path, depth): the
 //! path's own random numbers, so its later vertices, are those it had without this, and a
 //! path re-traced in another frame of a still scene keeps the same VPLs.
@@ -42,40 +51,71 @@ pub const NEAR_KEEP: f32 = 1.0 / 16.0;
 /// cannot tell one distance from another.
 pub const REACH: f32 = 0.02;
 
-/// The probability that the VPL at `x` (normal `n`, facing the side the light arrived from) of
-/// light path `path`, bounce `depth`, is kept, and the coin: Some((p, near)) if kept, `near`
-/// when none of its rays got out (kept with probability [`NEAR_KEEP`] for the compensation
-/// alone, which reads VPLs with exact visibility: the GPU's gather does not see it).
-pub fn keep(
-    tracer: &Tracer,
-    x: Vec3,
-    n: Vec3,
-    (seed, path, depth): (u64, u64, u32),
-) -> Option<(f32, bool)> {
+/// How far, in reaches, a crevice vertex's rays may end for its light to count as its
+/// neighbourhood's alone: a vertex of which fewer than a quarter of the rays get beyond the
+/// reach, and none beyond `FAR` reaches, lights the crevice and what lies within `FAR` reaches
+/// of it, and the compensation reads it there ([`crate::vpl::Vpl::near`]).
+pub const FAR: f32 = 4.0;
+
+/// What the coin found at a vertex ([`coin`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coin {
+    /// `Some((p, near))` if the vertex's VPL is kept: with probability `p` (its power divided
+    /// by `p`), and `near` the distance within which the compensation alone reads it (`None`:
+    /// the GPU's gather reads it, as any VPL).
+    pub kept: Option<(f32, Option<f32>)>,
+    /// Fewer than a quarter of the vertex's rays got beyond the reach: light here has a long
+    /// way out, and a light path goes on from it without Russian roulette on albedo 1
+    /// (`vpl::paths`).
+    pub crevice: bool,
+}
+
+/// The coin at the vertex `x` (normal `n`, facing the side the light arrived from) of light
+/// path `path`, bounce `depth` ([`Coin`]). A vertex a quarter of whose rays or more get out is
+/// kept, for the GPU. One none of whose rays got out is kept with probability [`NEAR_KEEP`]
+/// and read within the reach; one with a ray out, but fewer than a quarter, with probability
+/// `p = 4 open / RAYS`, and read by the compensation alone within [`FAR`] reaches if no ray got
+/// that far, else by the GPU.
+pub fn coin(tracer: &Tracer, x: Vec3, n: Vec3, (seed, path, depth): (u64, u64, u32)) -> Coin {
     let mut r = rng(&[seed, path, depth as u64, 0xc7e5]);
     let reach = REACH * tracer.size();
+    let far = FAR * reach;
     let side = (RAYS as f32).sqrt() as u32;
-    let mut open = 0u32;
+    let (mut open, mut beyond) = (0u32, false);
     for i in 0..RAYS {
         let u = Vec2::new(
             ((i % side) as f32 + r.random::<f32>()) / side as f32,
             ((i / side) as f32 + r.random::<f32>()) / side as f32,
         );
         let d = cosine_hemisphere(n, u);
-        if tracer
-            .intersect_light(tracer.offset(x, n, d), d, reach)
-            .is_none()
-        {
+        let t = tracer
+            .intersect_light(tracer.offset(x, n, d), d, far)
+            .map_or(f32::INFINITY, |h| h.t);
+        if t > reach {
             open += 1;
+            beyond |= t > far;
             if 4 * open >= RAYS {
-                return Some((1.0, false));
+                return Coin {
+                    kept: Some((1.0, None)),
+                    crevice: false,
+                };
             }
         }
     }
-    if open == 0 {
+    let kept = if open == 0 {
         // None got out: kept, rarely, for the compensation alone.
-        return (r.random::<f32>() < NEAR_KEEP).then_some((NEAR_KEEP, true));
+        (r.random::<f32>() < NEAR_KEEP).then_some((NEAR_KEEP, Some(reach)))
+    } else {
+        let p = (4 * open) as f32 / RAYS as f32;
+        (r.random::<f32>() < p).then_some((p, (!beyond).then_some(far)))
+    };
+    Coin {
+        kept,
+        crevice: true,
     }
-    let p = (4 * open) as f32 / RAYS as f32;
-    (r.random::<f32>() < p).then_some((p, false))
+}
+
+/// Whether [`coin`] keeps the VPL at `x`: `Some((p, near))` ([`Coin::kept`]).
+pub fn keep(tracer: &Tracer, x: Vec3, n: Vec3, id: (u64, u64, u32)) -> Option<(f32, Option<f32>)> {
+    coin(tracer, x, n, id).kept
 }

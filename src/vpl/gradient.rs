@@ -85,7 +85,7 @@ impl LightGradient {
         let light = |vs: &[Vpl], x: Vec3, n: Vec3, h: f32| -> f32 {
             // The light the GPU gathers: not a crevice's VPLs (vpl::crevice).
             vs.iter()
-                .filter(|v| !v.near)
+                .filter(|v| v.near.is_none())
                 .map(|v| {
                     let s = ShadedVpl::new(v, 1.0 / PROBE_PATHS as f32);
                     let c = s.radiance_at(x, n, Vec3::ONE, clamp.max(h));

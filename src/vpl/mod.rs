@@ -20,8 +20,8 @@ pub struct ShadedVpl {
     pub position: Vec3,
     pub normal: Vec3,
     pub flux: Vec3,
-    /// Read by the compensation alone ([`Vpl::near`]).
-    pub near: bool,
+    /// Read by the compensation alone, within this distance of a pixel's point ([`Vpl::near`]).
+    pub near: Option<f32>,
 }
 
 impl ShadedVpl {

@@ -313,7 +313,7 @@ fn random_vpls(frame: &irad::scene::Frame, seed: u64) -> Vec<irad::vpl::ShadedVp
                 position: frame.point(tri, b1, b2),
                 normal: frame.normals[tri],
                 flux: glam::Vec3::splat(0.05),
-                near: false,
+                near: None,
             }
         })
         .collect()
@@ -506,7 +506,7 @@ fn interleave_filter_does_not_bleed_across_depth_or_normal_edges() {
             position: sq.x + sq.n * h,
             normal: -sq.n,
             flux: glam::Vec3::ONE,
-            near: false,
+            near: None,
         }];
         let full = indirect(&mut full_r, &frame, &vpl, h * 0.5);
         let bright = full.data[q].y;

@@ -22,8 +22,8 @@ pub fn key(v: &Vpl) -> Key {
 
 /// The VPLs of paths `stream * 2^32 + k`, k = 0, 1, ... (`stream` is the frame index for
 /// fresh paths, a fixed number for paths that are the same every frame). Paths are added
-/// until there are `target` VPLs (`whole`: only whole paths that fit); returns the VPLs and
-/// the number of paths.
+/// until there are `target` VPLs the GPU gathers (`whole`: only whole paths that fit; a
+/// crevice's `near` VPLs come along uncounted); returns the VPLs and the number of paths.
 pub fn fresh_paths(
     frame: &Frame,
     tracer: &Tracer,
@@ -52,10 +52,14 @@ pub fn paths_by(
     whole: bool,
 ) -> (Vec<Vpl>, u64) {
     let mut vpls = Vec::with_capacity(target + 16);
+    // The slots count the VPLs the GPU gathers: a crevice's `near` VPLs, which the
+    // compensation alone reads (vpl::crevice), take none.
+    let gathered = |p: &[Vpl]| p.iter().filter(|v| v.near.is_none()).count();
+    let mut filled = 0usize;
     let mut paths = 0u64;
     // Batches of paths in parallel, kept in path order.
-    while vpls.len() < target && paths < 64 * target as u64 + 1024 {
-        let batch = ((target - vpls.len()) / 2).clamp(1, 4096) as u64;
+    while filled < target && paths < 64 * target as u64 + 1024 {
+        let batch = ((target - filled) / 2).clamp(1, 4096) as u64;
         let traced: Vec<Vec<Vpl>> = {
             use rayon::prelude::*;
             (paths..paths + batch)
@@ -64,17 +68,24 @@ pub fn paths_by(
                 .collect()
         };
         for p in traced {
-            if whole && vpls.is_empty() && p.len() > target {
+            let n = gathered(&p);
+            if whole && filled == 0 && n > target {
                 // One path longer than every slot (an albedo-1 room can bounce for hundreds
                 // of vertices): its first `target` VPLs, rather than no light at all.
-                vpls.extend(p.into_iter().take(target));
+                let mut left = target;
+                vpls.extend(p.into_iter().take_while(|v| {
+                    let take = left > 0;
+                    left -= usize::from(take && v.near.is_none());
+                    take
+                }));
                 return (vpls, 1);
             }
-            if vpls.len() >= target || (whole && vpls.len() + p.len() > target) {
+            if filled >= target || (whole && filled + n > target) {
                 return (vpls, paths);
             }
             // A path that left no VPL (its light escaped) still counts as a path.
             vpls.extend(p);
+            filled += n;
             paths += 1;
         }
     }

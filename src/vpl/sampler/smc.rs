@@ -324,7 +324,7 @@ pub(super) fn newborns(
                 depth: 0,
                 path: f * PATHS_PER_FRAME + i as u64,
                 tri: 0,
-                near: false,
+                near: None,
             }),
         };
         out.born.push((pa, vs, imp));
