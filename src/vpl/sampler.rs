@@ -46,7 +46,7 @@ mod settings;
 mod smc;
 mod uniform;
 
-pub use common::{cdf_draw, mh_accept, PATHS_PER_FRAME};
+pub use common::{cdf_draw, mh_accept, NEAR_SLOTS, PATHS_PER_FRAME};
 pub use rmsmc::{assign as rmsmc_assign, ess as rmsmc_ess};
 pub use settings::SamplerConfig;
 pub use smc::spread as smc_spread;

@@ -113,3 +113,51 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
         }
     }
 }
+
+/// A scene that is all crevice: two albedo-1 plates 2 m across, 1 mm apart, and a lamp
+/// between them. Every light path bounces between the plates until the 1024-bounce cut, and
+/// every vertex is the compensation's (no ray of it gets out), so its VPLs take no slot: a
+/// frame's paths stop at `NEAR_SLOTS` VPLs a slot (about 256 paths here), where they would
+/// otherwise go on to 64 paths a slot (65,536 paths of 1024 bounces, 16 rays each).
+#[test]
+fn a_scene_all_crevice_stops_its_light_paths() {
+    let mut q = Quads::default();
+    let white = q.material(1.0, 0.0, true);
+    let lamp = q.material(1.0, 10.0, false);
+    let (u, v) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    q.quad([0.0, 0.0, 0.0], v, u, white, json!({}));
+    q.quad([0.0, 0.001, 0.0], u, v, white, json!({}));
+    q.quad(
+        [0.0, 0.0002, 0.0],
+        [0.05, 0.0, 0.0],
+        [0.0, 0.0, -0.05],
+        lamp,
+        json!({}),
+    );
+    let scene = load(&q.finish());
+    let frame = scene.at(0.0);
+    let tracer = Tracer::new(&frame);
+    let mut cfg = crate::common::render_config();
+    cfg.vpls = 1024;
+    cfg.sampler.kind = irad::vpl::sampler::SamplerKind::Uniform;
+    let params = irad::resolve::sampler_params(&cfg, &frame, &tracer);
+    assert_eq!(params.slots, 1024);
+    let s = irad::vpl::sampler::Sampler::new(params).select(&frame, &tracer, 0);
+    let near = s.vpls.iter().filter(|v| v.near.is_some()).count();
+    println!(
+        "{} paths, {} VPLs, {near} of them the compensation's",
+        s.paths,
+        s.vpls.len()
+    );
+    let most = irad::vpl::sampler::NEAR_SLOTS * 1024;
+    assert!(
+        s.paths > 0 && near > s.vpls.len() * 9 / 10,
+        "{near} of {}",
+        s.vpls.len()
+    );
+    assert!(
+        s.vpls.len() >= most && s.vpls.len() <= most + irad::vpl::paths::MAX_DEPTH as usize,
+        "{} VPLs",
+        s.vpls.len()
+    );
+}

@@ -42,6 +42,11 @@ pub fn fresh_paths(
     )
 }
 
+/// How many VPLs, the compensation's included, a frame's paths may leave for each slot
+/// ([`paths_by`]): the sweep's 1 mm gap leaves about 8 (9300 for 1024 slots, paths bouncing up
+/// to 1024 times in the gap with `vpl::crevice`'s coin).
+pub const NEAR_SLOTS: usize = 16;
+
 /// [`fresh_paths`] with the k-th path's id given by `id(k)`.
 pub fn paths_by(
     frame: &Frame,
@@ -57,8 +62,11 @@ pub fn paths_by(
     let gathered = |p: &[Vpl]| p.iter().filter(|v| v.near.is_none()).count();
     let mut filled = 0usize;
     let mut paths = 0u64;
-    // Batches of paths in parallel, kept in path order.
-    while filled < target && paths < 64 * target as u64 + 1024 {
+    // Batches of paths in parallel, kept in path order; in a scene that is all crevice (its
+    // paths leave the compensation's VPLs alone, each path up to paths::MAX_DEPTH bounces of
+    // them), only until NEAR_SLOTS times the slots of those.
+    let most = NEAR_SLOTS * target.max(1);
+    while filled < target && paths < 64 * target as u64 + 1024 && vpls.len() < most {
         let batch = ((target - filled) / 2).clamp(1, 4096) as u64;
         let traced: Vec<Vec<Vpl>> = {
             use rayon::prelude::*;
@@ -80,7 +88,7 @@ pub fn paths_by(
                 }));
                 return (vpls, 1);
             }
-            if filled >= target || (whole && filled + n > target) {
+            if filled >= target || vpls.len() >= most || (whole && filled + n > target) {
                 return (vpls, paths);
             }
             // A path that left no VPL (its light escaped) still counts as a path.
