@@ -19,7 +19,8 @@
 //! inside from the VPLs, had 40% too little of it halfway in (docs/math.md, "Inside the 1 cm
 //! gap"). The path goes on either way, so the light that leaves the crevice arrives as the
 //! VPLs of its later vertices. Unbiased for every vertex (the coin's probability is divided
-//! out), but for the light of a crevice's VPL that reaches a pixel's point beyond the reach.
+//! out), but for the light of a crevice's VPL that reaches a pixel's point beyond its reach
+//! (the reach, or `FAR` reaches below).
 //!
 //! A vertex with a ray out but fewer than a quarter, none of whose rays ends beyond [`FAR`]
 //! reaches (deep in a 1 cm gap, where only grazing rays get past the reach), lights the
@@ -31,8 +32,9 @@
 //! that lived, weighted 1/0.99 a bounce (docs/math.md, "The room's slots").
 //!
 //! The rays and the coin draw from a stream of their own, seeded by (seed, path, depth): the
-//! path's own random numbers, so its later vertices, are those it had without this, and a
-//! path re-traced in another frame of a still scene keeps the same VPLs.
+//! path's own random numbers are those it had without this (only whether its roulette may go
+//! on at 1 depends on the rays), and a path re-traced in another frame of a still scene keeps
+//! the same VPLs.
 
 use crate::math::{cosine_hemisphere, rng};
 use crate::trace::Tracer;
