@@ -83,19 +83,21 @@ pub fn coin(tracer: &Tracer, x: Vec3, n: Vec3, (seed, path, depth): (u64, u64, u
     let reach = REACH * tracer.size();
     let far = FAR * reach;
     let side = (RAYS as f32).sqrt() as u32;
-    let (mut open, mut beyond) = (0u32, false);
+    // The rays that got out (fewer than a quarter of them, or the vertex is no crevice).
+    let mut out = [Vec3::ZERO; RAYS as usize / 4];
+    let mut open = 0u32;
     for i in 0..RAYS {
         let u = Vec2::new(
             ((i % side) as f32 + r.random::<f32>()) / side as f32,
             ((i / side) as f32 + r.random::<f32>()) / side as f32,
         );
         let d = cosine_hemisphere(n, u);
-        let t = tracer
-            .intersect_light(tracer.offset(x, n, d), d, far)
-            .map_or(f32::INFINITY, |h| h.t);
-        if t > reach {
+        if tracer
+            .intersect_light(tracer.offset(x, n, d), d, reach)
+            .is_none()
+        {
+            out[open as usize] = d;
             open += 1;
-            beyond |= t > far;
             if 4 * open >= RAYS {
                 return Coin {
                     kept: Some((1.0, None)),
@@ -109,15 +111,18 @@ pub fn coin(tracer: &Tracer, x: Vec3, n: Vec3, (seed, path, depth): (u64, u64, u
         (r.random::<f32>() < NEAR_KEEP).then_some((NEAR_KEEP, Some(reach)))
     } else {
         let p = (4 * open) as f32 / RAYS as f32;
-        (r.random::<f32>() < p).then_some((p, (!beyond).then_some(far)))
+        // Only for a crevice's vertex: whether a ray that got out gets beyond FAR reaches too.
+        let beyond = || {
+            out[..open as usize].iter().any(|&d| {
+                tracer
+                    .intersect_light(tracer.offset(x, n, d), d, far)
+                    .is_none()
+            })
+        };
+        (r.random::<f32>() < p).then(|| (p, (!beyond()).then_some(far)))
     };
     Coin {
         kept,
         crevice: true,
     }
-}
-
-/// Whether [`coin`] keeps the VPL at `x`: `Some((p, near))` ([`Coin::kept`]).
-pub fn keep(tracer: &Tracer, x: Vec3, n: Vec3, id: (u64, u64, u32)) -> Option<(f32, Option<f32>)> {
-    coin(tracer, x, n, id).kept
 }

@@ -3,7 +3,7 @@
 
 use crate::common::quads::{load, Quads};
 use irad::trace::Tracer;
-use irad::vpl::crevice::{keep, FAR, NEAR_KEEP, RAYS, REACH};
+use irad::vpl::crevice::{coin, FAR, NEAR_KEEP, RAYS, REACH};
 use serde_json::json;
 
 /// Two 2 x 2 plates facing each other `gap` apart (the lower at y = 0, facing up).
@@ -49,7 +49,7 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
         let coins: Vec<Option<(f32, Option<f32>)>> = (0..n)
             .map(|path| {
                 let x = glam::Vec3::new(0.0137, 0.0, -0.0291);
-                keep(&tracer, x, glam::Vec3::Y, (7, path, 1))
+                coin(&tracer, x, glam::Vec3::Y, (7, path, 1)).kept
             })
             .collect();
         // Kept with no ray out: read within the reach, and kept with probability NEAR_KEEP
