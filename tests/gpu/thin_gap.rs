@@ -270,13 +270,18 @@ fn judge_frame(
             let refs: Vec<_> = (1..=seeds)
                 .map(|s| common::reference_capped_from(scene, size, spp, s, cap))
                 .collect();
-            let mut mean = refs[0].clone();
-            for (px, i) in mean.data.iter_mut().enumerate() {
-                *i = refs.iter().map(|r| r.data[px]).sum::<glam::Vec3>() / seeds as f32;
-            }
-            mean
+            mean_of(&refs)
         })
         .clone()
+}
+
+/// The per-pixel mean of `images` (all of one size; at least one).
+fn mean_of(images: &[irad::image::Hdr]) -> irad::image::Hdr {
+    let mut mean = images[0].clone();
+    for (px, i) in mean.data.iter_mut().enumerate() {
+        *i = images.iter().map(|r| r.data[px]).sum::<glam::Vec3>() / images.len() as f32;
+    }
+    mean
 }
 
 /// Frame 0 of `scene` at `size`^2 with 1024 VPLs of `sampler` (default settings otherwise, as
@@ -727,10 +732,7 @@ fn the_wide_gaps_against_references_that_carry_the_gaps_light() {
                 .map(|s| common::reference_capped_from(&scene, 32, 8192, s, 256))
                 .collect();
             let noise = |r: &[irad::image::Hdr]| irad::metrics::frame_error(&r[0], &r[1]).unwrap();
-            let mut judge = late[0].clone();
-            for (px, i) in judge.data.iter_mut().enumerate() {
-                *i = late.iter().map(|r| r.data[px]).sum::<glam::Vec3>() / late.len() as f32;
-            }
+            let judge = mean_of(&late);
             for sampler in [
                 irad::vpl::sampler::SamplerKind::Uniform,
                 irad::vpl::sampler::SamplerKind::Mh,
