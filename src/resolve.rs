@@ -3,7 +3,7 @@
 //! recorded in `run.json`. What `0` (from the scene) means for each setting is here: the
 //! emitter samples from the direct light's variance where the camera looks ([`light_samples`]),
 //! the ISM points from what a VPL sees ([`ism_points`]), the interleave block from the VPL
-//! count ([`interleave_for`]), the distance clamp from the scene's size ([`clamp`]), the
+//! count and the image's size ([`interleave_for`]), the distance clamp from the scene's size ([`clamp`]), the
 //! adapter's caps on them.
 
 use crate::config::Render;
@@ -180,16 +180,30 @@ pub fn aa(cfg: &Render) -> u32 {
     }
 }
 
-/// `--interleave 0`'s block side for `vpls` VPLs: 8 from 4096 VPLs (each pixel still gathers
-/// 64), else 4. Measured on `cornell-orbit` at 256x256 (`git show 38ba47d:README.md`, "Speed against Mitsuba 3"):
-/// frames alone, 8 against 4 raises relMSE 9% at 256 VPLs and 8% at 1024 but 2% at 4096,
-/// where it takes the gather from 320 ms to 70 ms a frame on lavapipe.
-pub fn interleave_for(vpls: u32) -> u32 {
-    if vpls >= 4096 {
-        8
-    } else {
-        4
+/// Pixel-VPL pairs a frame's gather evaluates in full before `--interleave 0` interleaves it:
+/// 2^23, about 20 ms on this project's 2-core llvmpipe (the full gather of 64x64 sub-samples and
+/// 1024 VPLs, 2^22 pairs, takes 10 ms there) and well under a millisecond on a GPU.
+pub const GATHER_PAIRS: u64 = 1 << 23;
+
+/// `--interleave 0`'s block side for `vpls` VPLs over `sub_pixels` sub-samples (the pixels
+/// times `aa^2`): the smallest of 1, 2, 4 (8 from 4096 VPLs) that keeps the gather within
+/// [`GATHER_PAIRS`] pixel-VPL pairs, or the largest. Interleaving is a trade of the gather's
+/// time for error: its filter averages each block's subsets back over a block that, in a
+/// small image, spans much of what the image shows. Where the full gather costs no more than
+/// the budget it is not made. Measured: on the 1 cm gap's box at 32x32 with 1024 VPLs (2^22
+/// pairs), a 4x4 block against none takes the relMSE against 16 references from 0.040 to 0.034
+/// (`mh`, mean of seeds 1-8; largest 0.061 to 0.049). At the largest side, on `cornell-orbit`
+/// at 256x256 (`git show 38ba47d:README.md`, "Speed against Mitsuba 3"): frames alone, 8
+/// against 4 raises relMSE 9% at 256 VPLs and 8% at 1024 but 2% at 4096, where it takes the
+/// gather from 320 ms to 70 ms a frame on lavapipe.
+pub fn interleave_for(vpls: u32, sub_pixels: u64) -> u32 {
+    let most = if vpls >= 4096 { 8 } else { 4 };
+    let pairs = sub_pixels.saturating_mul(vpls as u64);
+    let mut n = 1;
+    while n < most && pairs > GATHER_PAIRS * (n * n) as u64 {
+        n *= 2;
     }
+    n
 }
 
 /// The range of `--ism-points 0`'s choice.
@@ -267,7 +281,10 @@ pub fn bounds(cfg: &Render, triangles: usize) -> RendererConfig {
         },
         shadow_size: q.shadow_size,
         interleave: match q.interleave {
-            0 => interleave_for(cfg.vpls),
+            0 => {
+                let (w, h, aa) = (cfg.sequence.size.width, cfg.sequence.size.height, aa(cfg));
+                interleave_for(cfg.vpls, w as u64 * h as u64 * (aa * aa) as u64)
+            }
             n => n,
         },
         aa: aa(cfg),
@@ -656,12 +673,54 @@ mod tests {
     }
 
     #[test]
-    fn interleave_zero_chooses_from_the_vpl_count() {
+    fn interleave_zero_chooses_from_the_vpl_count_and_the_size() {
+        // 256x256 (the default) with 2x2 sub-samples: the largest block.
         let mut r = Render::default();
+        assert_eq!(r.sequence.size.width, 256);
         assert_eq!(bounds(&r, 36).interleave, 4);
         r.vpls = 4096;
         assert_eq!(bounds(&r, 36).interleave, 8);
         r.quality.interleave = 2;
-        assert_eq!(bounds(&r, 36).interleave, 2);
+        assert_eq!(bounds(&r, 36).interleave, 2, "--interleave 2 is kept");
+        // Small images: the thin-gap sweep's 32x32 and 1024 VPLs (2^22 pairs) are gathered in
+        // full; 64x64 (2^24) in 2x2 blocks; 128x128 in 4x4.
+        r.quality.interleave = 0;
+        r.vpls = 1024;
+        for (side, want) in [(32, 1), (64, 2), (128, 4), (1920, 4)] {
+            r.sequence.size = crate::config::Size {
+                width: side,
+                height: side,
+            };
+            assert_eq!(bounds(&r, 36).interleave, want, "{side}x{side}");
+        }
+        // Over sizes and VPL counts: the smallest block that keeps the gather within the
+        // budget, never above 4 (8 from 4096 VPLs), and never smaller in a larger image.
+        for vpls in [1, 64, 256, 1024, 4095, 4096, 65536] {
+            let most = if vpls >= 4096 { 8 } else { 4 };
+            let mut last = 1;
+            for side in [1u64, 8, 16, 32, 45, 64, 100, 128, 256, 1080, 4096, 1 << 20] {
+                let px = side * side * 4;
+                let n = interleave_for(vpls, px);
+                assert!(
+                    [1, 2, 4, 8].contains(&n) && n <= most,
+                    "{vpls} VPLs, {side}: {n}"
+                );
+                assert!(
+                    n >= last,
+                    "{vpls} VPLs: {side} gets {n}, smaller than {last}"
+                );
+                let pairs = px as u128 * vpls as u128;
+                let within = |n: u32| pairs <= GATHER_PAIRS as u128 * (n * n) as u128;
+                assert!(
+                    n == most || within(n),
+                    "{vpls} VPLs, {side}: {n} over the budget"
+                );
+                assert!(
+                    n == 1 || !within(n / 2),
+                    "{vpls} VPLs, {side}: {n} not the smallest"
+                );
+                last = n;
+            }
+        }
     }
 }

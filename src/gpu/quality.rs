@@ -40,7 +40,8 @@ pub struct Quality {
     pub shadow_size: u32,
     /// Interleaved gather: each pixel of an NxN block gathers every (N^2)-th VPL, then a
     /// depth- and normal-aware NxN filter recombines them (1: off, every pixel gathers all;
-    /// 0: from the VPL count, 8 from 4096 VPLs, else 4; see `interleave_for`)
+    /// 0: from the VPL count and the image's size, at most 8 from 4096 VPLs, else 4, and 1
+    /// where the full gather costs little; see `resolve::interleave_for`)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().interleave, allow_hyphen_values = true))]
     pub interleave: u32,
     /// Anti-aliasing: S x S sub-samples per pixel, box-filtered into the pixel (the
@@ -87,7 +88,8 @@ impl Default for Quality {
             // cornell-light (its light starts near a wall), 24 for two-rooms, 14 for the atrium.
             light_samples: 0,
             shadow_size: 256,
-            // From the VPL count (`interleave_for`): 4, or 8 from 4096 VPLs.
+            // From the VPL count and the image's size (`resolve::interleave_for`): 4, or 8 from
+            // 4096 VPLs, less in a small image.
             interleave: 0,
             // From the method (`resolve::aa`): 2x2 sub-samples for instant radiosity, measured
             // on the Cornell box at 128x128 (docs/antialiasing.md): the mean luminance goes

@@ -417,21 +417,26 @@ fn the_floor_is_what_a_near_perfect_renderer_measures() {
 
 #[test]
 fn run_json_records_the_budgets_the_scene_chose() {
-    // --ism-points 0 and --interleave 0 (the defaults) choose from the scene and the VPLs;
-    // run.json says what they chose, the same as the library's rules give.
+    // --ism-points 0 and --interleave 0 (the defaults) choose from the scene, the VPLs and the
+    // image's size; run.json says what they chose, the same as the library's rules give (at
+    // 16x16 and 2x2 sub-samples, 4096 VPLs are 2^22 pixel-VPL pairs, gathered in full).
     let scene = irad::scene::builtin::load("cornell").unwrap().unwrap();
     let f = scene.at(0.0);
     let tracer = irad::trace::Tracer::new(&f);
     let seen = irad::gpu::ism::seen_fraction(&f, &tracer, 1);
     let want = irad::resolve::ism_points_for(64, 3, seen, f.tris.len());
     assert!((64..4096).contains(&want), "{want}");
-    for (vpls, interleave) in [("64", 4), ("4096", 8)] {
-        let out = tmp(&format!("budgets{vpls}"));
+    for (vpls, size, interleave) in [
+        ("64", "16x16", 1),
+        ("4096", "16x16", 1),
+        ("4096", "96x96", 8),
+    ] {
+        let out = tmp(&format!("budgets{vpls}-{size}"));
         let o = irad(&[
             "render",
             "cornell",
             "--size",
-            "16x16",
+            size,
             "--frames",
             "0",
             "--vpls",
@@ -447,7 +452,7 @@ fn run_json_records_the_budgets_the_scene_chose() {
         let run: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("run.json")).unwrap()).unwrap();
         assert_eq!(run["gpu"]["ism_points"], want, "{vpls} VPLs");
-        assert_eq!(run["gpu"]["interleave"], interleave, "{vpls} VPLs");
+        assert_eq!(run["gpu"]["interleave"], interleave, "{vpls} VPLs, {size}");
         std::fs::remove_dir_all(&out).unwrap();
     }
 }
