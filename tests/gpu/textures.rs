@@ -671,11 +671,12 @@ fn gpu_agrees_with_the_reference_on_a_textured_room() {
         "gpu vs reference: relMSE {:.5}, relative bias {:+.5}; indirect {:.3} of the frame",
         e.rel_mse, e.rel_bias, share
     );
-    // Measured on lavapipe: relMSE 0.00109, relative bias +0.0043 (20% of the frame is
-    // indirect light). With the lamp's back face winning the depth test over its emitting twin
-    // on a quarter of two pixels, -0.013; with the light's edges from the 2x2 sub-samples
-    // instead of box-filtered, relMSE 0.00211.
-    let (rel_mse_bound, bias_bound) = (0.0032, 0.005);
+    // Measured on lavapipe: relMSE 0.00140, relative bias +0.0052 (20% of the frame is
+    // indirect light), with the 2x2 interleave `resolve::interleave_for` gives this 64x64 frame
+    // (0.00109 and +0.0043 with the 4x4 one before). With the lamp's back face winning the
+    // depth test over its emitting twin on a quarter of two pixels, -0.013; with the light's
+    // edges from the 2x2 sub-samples instead of box-filtered, relMSE 0.00211.
+    let (rel_mse_bound, bias_bound) = (0.0032, 0.0065);
     let mut images = String::new();
     if e.rel_mse > rel_mse_bound || e.rel_bias.abs() > bias_bound {
         images = format!(
