@@ -219,7 +219,7 @@ pub struct Reference {
     /// The bounce from which Russian roulette lets a path go on with probability at most 0.95
     /// (as Mitsuba 3 does from its rr_depth); before it, a path between albedo-1 surfaces goes
     /// on at weight 1. Later converges faster where light bounces long between white surfaces
-    /// (3 to 4096; docs/math.md, "What the reference can show of a gap")
+    /// (3 to 65536; docs/math.md, "What the reference can show of a gap")
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Reference::default().rr_cap_depth, allow_hyphen_values = true))]
     pub rr_cap_depth: u32,
     /// Output folder

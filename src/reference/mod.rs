@@ -27,7 +27,7 @@ pub const MAX_SPP: u32 = 1 << 20;
 pub const MAX_SIZE: u32 = 16384;
 /// The latest bounce [`ReferenceSettings::rr_cap_depth`] may be (a path in a closed albedo-1
 /// room goes on at weight 1 until it).
-pub const MAX_RR_CAP_DEPTH: u32 = 4096;
+pub const MAX_RR_CAP_DEPTH: u32 = 1 << 16;
 
 /// Parameters of one reference image.
 #[derive(Clone, Copy, Debug)]
@@ -313,7 +313,7 @@ mod tests {
                 rr_cap_depth: RR_DEPTH - 1,
                 ..d
             }),
-            "`rr_cap_depth` 2 is out of range: it must be 3 to 4096"
+            "`rr_cap_depth` 2 is out of range: it must be 3 to 65536"
         );
     }
 

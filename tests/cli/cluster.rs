@@ -553,7 +553,7 @@ fn the_roulettes_cap_depth_reaches_every_trace() {
         irad_in(&root, &["reference", "white.gltf", "--rr-cap-depth", "2"]),
     );
     assert!(
-        e.contains("--rr-cap-depth 2 is out of range: it must be 3 to 4096"),
+        e.contains("--rr-cap-depth 2 is out of range: it must be 3 to 65536"),
         "{e}"
     );
     std::fs::remove_dir_all(&root).unwrap();
