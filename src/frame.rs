@@ -337,7 +337,7 @@ impl Pipeline {
                 &self.tracer,
                 (c.width, c.height),
                 &light,
-                c.compensate,
+                (c.compensate, &image.hdr.data),
                 s.seed,
             );
             for &(i, l) in &added {

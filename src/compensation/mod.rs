@@ -22,10 +22,11 @@
 //!
 //! Each pixel's `K` paths start from `K` points spread over the pixel (a stratified set of
 //! camera rays), so a surface that covers less than a sub-sample of it (the mouth of a gap) is
-//! seen in proportion to its area. The random numbers of a pixel are the same every frame, so
+//! seen in proportion to its area. Where those `K` leave the pixel noisy, more rounds of `K`
+//! follow ([`compensate_in_rounds`]). The random numbers of a pixel are the same every frame, so
 //! a still view's compensation is still.
 
-use crate::math::{cosine_hemisphere, rng};
+use crate::math::{cosine_hemisphere, luminance, rng};
 use crate::reference::twin::SurfacePoint;
 use crate::scene::{EmitterSample, Frame, SampleKind};
 use crate::trace::Tracer;
@@ -120,17 +121,54 @@ impl Nearby {
 /// surfaces it meets for longer is lost).
 pub const MAX_BOUNCES: u32 = 256;
 
+/// Rounds of a pixel's paths the compensation traces at most: where the first round's paths
+/// leave the pixel's standard error above [`TARGET_ERROR`], up to this many rounds.
+pub const MAX_ROUNDS: u32 = 16;
+
+/// The standard error of a pixel's compensation, relative to the pixel's value (the GPU's
+/// passes' and the compensation's together), that its rounds aim for: a fifth. On the 1 cm
+/// gap's box a tenth gives the same relMSE at 32 x 32 (the pixels that see the gap's mouth take
+/// all 16 rounds either way) and costs 20% of the frame at 256 x 256 against 3%
+/// (docs/math.md, "Rounds of compensation paths").
+pub const TARGET_ERROR: f32 = 0.2;
+
 /// The light the clamp left out at each pixel of a `width x height` image that sees a
 /// surface with another within `clamp`: (pixel index, radiance to add), from `rays` paths a
-/// pixel (0: none).
+/// pixel (0: none) and more where they leave the pixel noisy ([`compensate_in_rounds`] with
+/// [`MAX_ROUNDS`]).
 pub fn compensate(
+    frame: &Frame,
+    tracer: &Tracer,
+    size: (u32, u32),
+    light: &Light,
+    (rays, seen): (u32, &[Vec3]),
+    seed: u64,
+) -> Vec<(usize, Vec3)> {
+    let rounds = (rays, seen, MAX_ROUNDS);
+    compensate_in_rounds(frame, tracer, size, light, rounds, seed)
+        .into_iter()
+        .map(|(i, l, _)| (i, l))
+        .collect()
+}
+
+/// [`compensate`] with at most `max_rounds` rounds of `rays` paths a pixel: (pixel index,
+/// radiance to add, rounds traced). Where a pixel's first round leaves its standard error
+/// above [`TARGET_ERROR`] of the pixel's value (`seen`, the frame's pixel without the
+/// compensation, plus the first round's estimate), it traces as many rounds more as bring it
+/// there by the first round's variance, `max_rounds` in all at most, and the estimate is the
+/// mean of all of them. The camera's view into a gap's mouth (`tests/gpu/thin_gap.rs`) is
+/// such a pixel: the few of its paths that go deep into the gap carry most of its light.
+/// (The number of rounds depends on the first round's samples, which the mean keeps, so where
+/// it varies from seed to seed the estimate is biased, as any adaptive sampling that keeps its
+/// pilot; docs/math.md, "Rounds of compensation paths", measures it.)
+pub fn compensate_in_rounds(
     frame: &Frame,
     tracer: &Tracer,
     (width, height): (u32, u32),
     light: &Light,
-    rays: u32,
+    (rays, seen, max_rounds): (u32, &[Vec3], u32),
     seed: u64,
-) -> Vec<(usize, Vec3)> {
+) -> Vec<(usize, Vec3, u32)> {
     if rays == 0 || light.clamp <= 0.0 || light.vpls.is_empty() && light.samples.is_empty() {
         return Vec::new();
     }
@@ -151,44 +189,81 @@ pub fn compensate(
         clamp: light.clamp,
     };
     let nearby = Nearby::new(light.vpls, tracer);
+    let lights = (light, &near, &nearby);
     (0..(width * height) as usize)
         .into_par_iter()
         .filter_map(|i| {
             let mut r = rng(&[seed, i as u64, 0xc1a3]);
-            // Latin hypercube over the pixel: ray k in column k and a shuffled row.
-            let mut rows: Vec<u32> = (0..rays).collect();
-            for k in (1..rays as usize).rev() {
-                rows.swap(k, r.random_range(0..=k));
-            }
             let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
-            let mut sum = Vec3::ZERO;
-            for (k, &row) in rows.iter().enumerate() {
-                let sub = Vec2::new(
-                    (k as f32 + r.random::<f32>()) / rays as f32,
-                    (row as f32 + r.random::<f32>()) / rays as f32,
-                );
-                let d = frame.camera.ray_dir(corner + sub, width, height);
-                let Some(h) = tracer.intersect(frame.camera.position, d, f32::INFINITY) else {
-                    continue;
-                };
-                let s = SurfacePoint::seen(frame, &h, d);
-                let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
-                sum += path(
-                    frame,
-                    tracer,
-                    &s,
-                    (light, &nearby),
-                    (u, MAX_BOUNCES),
-                    &mut r,
-                );
-                if !near.vpls.is_empty() {
-                    let subset = (r.random(), 0, VPLS_AT_HIT);
-                    sum += reflected(frame, tracer, &s, (&near, None), subset, true);
-                }
+            let pixel = (corner, (width, height));
+            let first = round(frame, tracer, pixel, lights, rays, &mut r);
+            let n = rays as f32;
+            let mean = luminance(first.sum) / n;
+            let variance = ((first.squares / n - mean * mean) * n / (n - 1.0).max(1.0)).max(0.0);
+            let value = seen.get(i).map_or(0.0, |&c| luminance(c)) + mean;
+            // The paths for a standard error of TARGET_ERROR of the pixel's value, in rounds.
+            let wanted = variance / (TARGET_ERROR * value).max(1e-12).powi(2) / n;
+            let most = max_rounds.max(1);
+            let rounds = if wanted.is_finite() {
+                wanted.ceil().clamp(1.0, most as f32) as u32
+            } else {
+                most
+            };
+            let mut sum = first.sum;
+            for _ in 1..rounds {
+                sum += round(frame, tracer, pixel, lights, rays, &mut r).sum;
             }
-            (sum != Vec3::ZERO).then(|| (i, sum / rays as f32))
+            (sum != Vec3::ZERO).then(|| (i, sum / (rounds * rays) as f32, rounds))
         })
         .collect()
+}
+
+/// A round's sum of its paths' estimates and of their luminances' squares.
+struct Round {
+    sum: Vec3,
+    squares: f32,
+}
+
+/// One round of `rays` compensation paths from the pixel whose corner is `corner` in a
+/// `width x height` image, from points spread over it (a Latin hypercube: ray k in column k
+/// and a shuffled row), each adding the light of `near` (the crevices' VPLs, at the point it
+/// sees) to its path's.
+fn round(
+    frame: &Frame,
+    tracer: &Tracer,
+    (corner, (width, height)): (Vec2, (u32, u32)),
+    (light, near, nearby): (&Light, &Light, &Nearby),
+    rays: u32,
+    r: &mut impl Rng,
+) -> Round {
+    let mut rows: Vec<u32> = (0..rays).collect();
+    for k in (1..rays as usize).rev() {
+        rows.swap(k, r.random_range(0..=k));
+    }
+    let mut out = Round {
+        sum: Vec3::ZERO,
+        squares: 0.0,
+    };
+    for (k, &row) in rows.iter().enumerate() {
+        let sub = Vec2::new(
+            (k as f32 + r.random::<f32>()) / rays as f32,
+            (row as f32 + r.random::<f32>()) / rays as f32,
+        );
+        let d = frame.camera.ray_dir(corner + sub, width, height);
+        let Some(h) = tracer.intersect(frame.camera.position, d, f32::INFINITY) else {
+            continue;
+        };
+        let s = SurfacePoint::seen(frame, &h, d);
+        let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
+        let mut l = path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r);
+        if !near.vpls.is_empty() {
+            let subset = (r.random(), 0, VPLS_AT_HIT);
+            l += reflected(frame, tracer, &s, (near, None), subset, true);
+        }
+        out.sum += l;
+        out.squares += luminance(l).powi(2);
+    }
+    out
 }
 
 /// One estimate of `L_c` at surface point `s`: a path of at most `bounces` bounces (1: the

@@ -61,7 +61,9 @@ pub struct Quality {
     /// clamp leaves out where surfaces meet within --clamp, and the near field of emitters
     /// (Kollig & Keller 2004; thin gaps, docs/math.md section 4). `auto`: 64 where a tenth or
     /// more of the emitters' light meets a surface within the clamp (a lamp under a ceiling,
-    /// in a recess), else off (see `resolve::compensate`); `off` or 0: off; K: 1 to 256
+    /// in a recess), else off (see `resolve::compensate`); `off` or 0: off; K: 1 to 256. A
+    /// pixel whose K paths leave it noisy (the view into a gap's mouth) traces up to 16 rounds
+    /// of K (`compensation::compensate_in_rounds`)
     #[cfg_attr(feature = "cli", arg(long, default_value_t = Quality::default().compensate, allow_hyphen_values = true))]
     pub compensate: Compensate,
     /// Temporal accumulation: each pixel's indirect light is the mean of up to N frames'
