@@ -70,6 +70,8 @@ pub struct Coin {
     /// way out, and a light path goes on from it without Russian roulette on albedo 1
     /// (`vpl::paths`).
     pub crevice: bool,
+    /// None of the vertex's rays got beyond the reach: it is sealed in its crevice.
+    pub sealed: bool,
 }
 
 /// The coin at the vertex `x` (normal `n`, facing the side the light arrived from) of light
@@ -102,6 +104,7 @@ pub fn coin(tracer: &Tracer, x: Vec3, n: Vec3, (seed, path, depth): (u64, u64, u
                 return Coin {
                     kept: Some((1.0, None)),
                     crevice: false,
+                    sealed: false,
                 };
             }
         }
@@ -124,5 +127,6 @@ pub fn coin(tracer: &Tracer, x: Vec3, n: Vec3, (seed, path, depth): (u64, u64, u
     Coin {
         kept,
         crevice: true,
+        sealed: open == 0,
     }
 }

@@ -20,9 +20,27 @@ use std::f32::consts::PI;
 
 /// Paths stop after this many bounces whatever Russian roulette says: far more than a light
 /// path needs in an open room, because light caught between two close white surfaces (a lamp
-/// just under the ceiling) takes about a hundred bounces to get out, and cutting it off darkens
-/// the room (0.58 of the reference in tests/gpu/thin_gap.rs at 16).
-pub const MAX_DEPTH: u32 = 1024;
+/// just under the ceiling) takes about a hundred bounces to get out of a 1 cm gap and thousands
+/// out of a 1 mm one (98.5% of it within 16384, `benches/gap_escape.py`), and cutting it off
+/// darkens the room (0.58 of the reference in tests/gpu/thin_gap.rs at 16; at 1024 the 1 mm
+/// gap's room was 25-28% under the true image, docs/math.md, "Out of a 1 mm gap").
+pub const MAX_DEPTH: u32 = 16384;
+
+/// From this bounce on, a path in a crevice tosses the crevice coin (`vpl::crevice`, 16 rays)
+/// only at every [`THIN`]-th vertex, at the first after a hop longer than the reach and where
+/// a ray along the vertex's normal runs a reach free, and leaves no VPL at the others: deep in
+/// a 1 mm gap a path bounces thousands of times, and the coin at each bounce cost 17 rays where
+/// the bounce now costs two. The VPLs of such a stretch are the compensation's (the crevice's
+/// inside), a sixteenth of them kept at their own power: the light they would add inside the
+/// gap past this bounce is left out (docs/math.md, "Out of a 1 mm gap").
+pub const DEEP: u32 = 256;
+
+/// The stride of the coin deep in a crevice ([`DEEP`]).
+pub const THIN: u32 = 16;
+
+/// Added to the bounce count of a VPL on a path's way out of a crevice (`Vpl::depth`), so that
+/// it and the VPL of the vertex the path reaches have different identities (path, depth).
+pub const EXIT: u32 = 1 << 31;
 
 /// A virtual point light: a light-path vertex on a diffuse surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,7 +52,8 @@ pub struct Vpl {
     /// Photon power arriving at the vertex (RGB watts) for a one-path estimate; a frame with
     /// N paths scales it by 1/N. The VPL re-emits `power * albedo` with a cosine lobe.
     pub power: Vec3,
-    /// Bounce count: 1 for the first surface hit after the emitter.
+    /// Bounce count: 1 for the first surface hit after the emitter; plus [`EXIT`] for a VPL on
+    /// the way out of a crevice, whose count is that of the vertex the path reaches.
     pub depth: u32,
     pub path: u64,
     pub tri: u32,
@@ -88,6 +107,12 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     if power == Vec3::ZERO {
         return out;
     }
+    let reach = super::crevice::REACH * tracer.size();
+    // What the last coin tossed found: the vertex in a crevice, and sealed in it.
+    let (mut in_crevice, mut sealed) = (false, false);
+    // The path's last vertex, its normal (facing the side the light arrived from), and whether
+    // its own coin found it sealed (None: its coin was not tossed).
+    let mut last: Option<(Vec3, Vec3, Option<bool>)> = None;
     for depth in 1..=MAX_DEPTH {
         let Some(h) = tracer.intersect_light(origin, dir, f32::INFINITY) else {
             break;
@@ -108,7 +133,59 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let nf = if ng.dot(dir) < 0.0 { ng } else { -ng };
         let albedo = frame.albedo_at(tri, h.b1, h.b2);
         // A vertex in a crevice is kept by a coin (vpl::crevice); the path goes on either way.
-        let coin = super::crevice::coin(tracer, x, nf, (seed, path, depth));
+        // Deep in a crevice, at every THIN-th vertex only (DEEP).
+        let hop_out = h.t > reach;
+        // Skipped only where a ray along the normal meets a surface within the reach: a
+        // path that walks out of the crevice in short hops (onto the lamp's side, the ceiling
+        // beyond its edge) has its coin and its VPLs again at once.
+        let skipped = in_crevice
+            && depth > DEEP
+            && depth % THIN != 0
+            && !hop_out
+            && tracer
+                .intersect_light(tracer.offset(x, nf, nf), nf, reach)
+                .is_some();
+        let coin = if skipped {
+            super::crevice::Coin {
+                kept: None,
+                crevice: true,
+                sealed,
+            }
+        } else {
+            super::crevice::coin(tracer, x, nf, (seed, path, depth))
+        };
+        // Out of a crevice from a vertex sealed in it (none of its coin's rays got out): the
+        // light of that vertex lit what the path now reaches through the crevice's mouth, which
+        // the GPU cannot resolve, and the vertex's VPL is the compensation's, read within the
+        // reach. So the light it sends out is a VPL of its own where the hop is out of the
+        // crevice, facing along it (docs/math.md, "Out of a 1 mm gap").
+        let exit = match last {
+            Some((y, n, was_sealed)) if in_crevice && hop_out && !coin.crevice => {
+                // Sealed by its own coin (tossed now if it was skipped: the coin of a vertex is
+                // the same whenever it is tossed).
+                let sealed_y = was_sealed.unwrap_or_else(|| {
+                    super::crevice::coin(tracer, y, n, (seed, path, depth - 1)).sealed
+                });
+                sealed_y
+                    .then(|| way_out(tracer, (origin, dir, h.t), n, reach))
+                    .flatten()
+            }
+            _ => None,
+        };
+        if let Some(position) = exit {
+            out.push(Vpl {
+                position,
+                normal: dir,
+                albedo: Vec3::ONE,
+                power,
+                depth: depth + EXIT,
+                path,
+                tri: h.tri,
+                near: None,
+            });
+        }
+        (in_crevice, sealed) = (coin.crevice, coin.sealed);
+        last = Some((x, nf, (!skipped).then_some(coin.sealed)));
         if let Some((p, near)) = coin.kept {
             out.push(Vpl {
                 position: x,
@@ -137,6 +214,30 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         origin = tracer.offset(x, nf, dir);
     }
     out
+}
+
+/// Where a hop of length `t` from `o` along `d`, out of a crevice whose vertex at `o` had the
+/// normal `n`, is out of it: the first of the points along it, a reach apart (an eighth of the
+/// hop apart if that is shorter; after 16 of them, twice as far each), from which a ray along
+/// `n` or against it runs a reach free. None if no such point comes before the hop's end.
+fn way_out(tracer: &Tracer, (o, d, t): (Vec3, Vec3, f32), n: Vec3, reach: f32) -> Option<Vec3> {
+    let mut step = reach.min(t / 8.0);
+    let mut s = step;
+    let mut k = 0;
+    while s < t {
+        let m = o + d * s;
+        if tracer.intersect_light(m, n, reach).is_none()
+            || tracer.intersect_light(m, -n, reach).is_none()
+        {
+            return Some(m);
+        }
+        k += 1;
+        if k >= 16 {
+            step *= 2.0;
+        }
+        s += step;
+    }
+    None
 }
 
 /// Where a light path leaves punctual light `l`, its direction, and its power over the

@@ -115,10 +115,11 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
 }
 
 /// A scene that is all crevice: two albedo-1 plates 2 m across, 1 mm apart, and a lamp
-/// between them. Every light path bounces between the plates until the 1024-bounce cut, and
-/// every vertex is the compensation's (no ray of it gets out), so its VPLs take no slot: a
-/// frame's paths stop at `NEAR_SLOTS` VPLs a slot (about 256 paths here), where they would
-/// otherwise go on to 64 paths a slot (65,536 paths of 1024 bounces, 16 rays each).
+/// between them. Every light path bounces between the plates until the 16384-bounce cut (its
+/// coin tossed at every 16th vertex past bounce 256, `vpl::paths::DEEP`), and every vertex is
+/// the compensation's (no ray of it gets out), so its VPLs take no slot: a frame's paths stop
+/// at `NEAR_SLOTS` VPLs a slot (207 paths here, 2 s), where they would otherwise go on to 64
+/// paths a slot (65,536 paths of 16384 bounces).
 #[test]
 fn a_scene_all_crevice_stops_its_light_paths() {
     let mut q = Quads::default();

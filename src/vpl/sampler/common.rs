@@ -43,8 +43,9 @@ pub fn fresh_paths(
 }
 
 /// How many VPLs, the compensation's included, a frame's paths may leave for each slot
-/// ([`paths_by`]): the sweep's 1 mm gap leaves about 8 (9300 for 1024 slots, paths bouncing up
-/// to 1024 times in the gap with `vpl::crevice`'s coin).
+/// ([`paths_by`]): the sweep's 1 mm gap left about 8 (9300 for 1024 slots) when paths bounced
+/// up to 1024 times in the gap with `vpl::crevice`'s coin at each bounce (now up to 16384, with
+/// the coin at every 16th bounce past 256, `vpl::paths::DEEP`).
 pub const NEAR_SLOTS: usize = 16;
 
 /// [`fresh_paths`] with the k-th path's id given by `id(k)`.
