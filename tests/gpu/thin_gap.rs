@@ -303,6 +303,7 @@ fn blocks(img: &irad::image::Hdr) -> irad::image::Hdr {
 /// The error of a frame of the sweep against its row's judge: pixel by pixel, but on 4 x 4
 /// blocks at 1 mm ([`judge`]).
 fn row_error(gap: f32, g: &irad::image::Hdr, r: &irad::image::Hdr) -> irad::metrics::FrameError {
+    // The rows whose judge is the mean of 16 deep references (1 mm) are compared on blocks.
     if judge(gap, 0).2 > 4 {
         irad::metrics::frame_error(&blocks(g), &blocks(r)).unwrap()
     } else {
