@@ -108,8 +108,8 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         return out;
     }
     let reach = super::crevice::REACH * tracer.size();
-    // What the last coin tossed found: the vertex in a crevice, and sealed in it.
-    let (mut in_crevice, mut sealed) = (false, false);
+    // The last vertex was in a crevice (by its coin, or its coin skipped deep in one).
+    let mut in_crevice = false;
     // The path's last vertex, its normal (facing the side the light arrived from), and whether
     // its own coin found it sealed (None: its coin was not tossed).
     let mut last: Option<(Vec3, Vec3, Option<bool>)> = None;
@@ -145,22 +145,15 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
             && tracer
                 .intersect_light(tracer.offset(x, nf, nf), nf, reach)
                 .is_some();
-        let coin = if skipped {
-            super::crevice::Coin {
-                kept: None,
-                crevice: true,
-                sealed,
-            }
-        } else {
-            super::crevice::coin(tracer, x, nf, (seed, path, depth))
-        };
+        let coin = (!skipped).then(|| super::crevice::coin(tracer, x, nf, (seed, path, depth)));
+        let crevice = coin.is_none_or(|c| c.crevice);
         // Out of a crevice from a vertex sealed in it (none of its coin's rays got out): the
         // light of that vertex lit what the path now reaches through the crevice's mouth, which
         // the GPU cannot resolve, and the vertex's VPL is the compensation's, read within the
         // reach. So the light it sends out is a VPL of its own where the hop is out of the
         // crevice, facing along it (docs/math.md, "Out of a 1 mm gap").
         let exit = match last {
-            Some((y, n, was_sealed)) if in_crevice && hop_out && !coin.crevice => {
+            Some((y, n, was_sealed)) if in_crevice && hop_out && !crevice => {
                 // Sealed by its own coin (tossed now if it was skipped: the coin of a vertex is
                 // the same whenever it is tossed).
                 let sealed_y = was_sealed.unwrap_or_else(|| {
@@ -184,9 +177,9 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
                 near: None,
             });
         }
-        (in_crevice, sealed) = (coin.crevice, coin.sealed);
-        last = Some((x, nf, (!skipped).then_some(coin.sealed)));
-        if let Some((p, near)) = coin.kept {
+        in_crevice = crevice;
+        last = Some((x, nf, coin.map(|c| c.sealed)));
+        if let Some((p, near)) = coin.and_then(|c| c.kept) {
             out.push(Vpl {
                 position: x,
                 normal: nf,
@@ -203,9 +196,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         // the way, so a path goes on at its power. Ended there at 0.99 a bounce, the light that
         // gets out came on the few paths that lived, each weighted 1/0.99 a bounce (up to
         // hundreds-fold out of a 1 mm gap), and a frame's VPLs had blotches of them.
-        let q = albedo
-            .max_element()
-            .min(if coin.crevice { 1.0 } else { 0.99 });
+        let q = albedo.max_element().min(if crevice { 1.0 } else { 0.99 });
         if q <= 0.0 || r.random::<f32>() >= q {
             break;
         }
