@@ -18,13 +18,17 @@
 //! clamp^2` and albedos so far, until a ray reaches no surface within `clamp` (the light from
 //! there on is the VPLs' and the emitter samples'), Russian roulette ends it, or after
 //! `MAX_BOUNCES`. Light caught between two surfaces closer than the clamp (a lamp under a
-//! ceiling, `tests/gpu/thin_gap.rs`) is then carried as the path tracer carries it.
+//! ceiling, `tests/gpu/thin_gap.rs`) is then carried as the path tracer carries it. Between
+//! two surfaces closer than the crevices' reach, where a path bounces thousands of times, a
+//! vertex's light is path traced alone, hops of any length picking up the emission they meet,
+//! until the walk gets out (docs/math.md, "Into a 1 mm gap").
 //!
 //! Each pixel's `K` paths start from `K` points spread over the pixel (a stratified set of
 //! camera rays), so a surface that covers less than a sub-sample of it (the mouth of a gap) is
 //! seen in proportion to its area. Where those `K` leave the pixel noisy, more rounds of `K`
-//! follow ([`compensate_in_rounds`]). The random numbers of a pixel are the same every frame, so
-//! a still view's compensation is still.
+//! follow ([`compensate_in_rounds`]), and all of them where finer camera rays find a crevice
+//! that the first round missed; a point in a crevice traces [`SPLIT`] paths. The random
+//! numbers of a pixel are the same every frame, so a still view's compensation is still.
 
 use crate::math::{cosine_hemisphere, luminance, rng};
 use crate::reference::twin::SurfacePoint;
@@ -204,11 +208,17 @@ pub fn compensate_in_rounds(
             // The paths for a standard error of TARGET_ERROR of the pixel's value, in rounds.
             let wanted = variance / (TARGET_ERROR * value).max(1e-12).powi(2) / n;
             let most = max_rounds.max(1);
-            let rounds = if wanted.is_finite() {
+            let mut rounds = if wanted.is_finite() {
                 wanted.ceil().clamp(1.0, most as f32) as u32
             } else {
                 most
             };
+            // A pixel across an edge may see into a crevice through a sliver thinner than
+            // its paths' strata (a 1 mm gap's mouth at 32 x 32 is a hundredth of a pixel),
+            // which its first round may miss: if finer camera rays find it, all rounds.
+            if first.edge && !first.sealed && sees_a_crevice(frame, tracer, pixel, &mut r) {
+                rounds = most;
+            }
             let mut sum = first.sum;
             for _ in 1..rounds {
                 sum += round(frame, tracer, pixel, lights, rays, &mut r).sum;
@@ -218,10 +228,58 @@ pub fn compensate_in_rounds(
         .collect()
 }
 
-/// A round's sum of its paths' estimates and of their luminances' squares.
+/// A round's sum of its paths' estimates and of their luminances' squares; whether its
+/// camera points lie on more than one plane (`edge`), and whether one was sealed in a crevice.
 struct Round {
     sum: Vec3,
     squares: f32,
+    edge: bool,
+    sealed: bool,
+}
+
+/// Compensation paths traced from a camera point sealed in a crevice ([`sealed_at`]), whose
+/// mean stands for its path: its light is a walk of hundreds of bounces whose length varies
+/// by several times its mean (docs/math.md, "Into a 1 mm gap").
+pub const SPLIT: u32 = 16;
+
+/// Camera rays with which [`sees_a_crevice`] looks for one: as many rows and columns of the
+/// pixel, one ray in each (a sliver a hundredth of the pixel wide, at any angle, meets two or
+/// three). At 256 x 256 they cost the 1 cm gap's box 0.4 s a frame, 1024 of them 0.8 s.
+const PROBES: u32 = 256;
+
+/// Whether the surface point `x` (normal `n`) is sealed in a crevice: a ray along its normal
+/// meets a surface within the reach ([`crate::vpl::crevice::REACH`] of the scene's size), as
+/// between a lamp's top and the ceiling.
+fn sealed_at(tracer: &Tracer, x: Vec3, n: Vec3) -> bool {
+    let reach = crate::vpl::crevice::REACH * tracer.size();
+    tracer.intersect(tracer.offset(x, n, n), n, reach).is_some()
+}
+
+/// Whether one of [`PROBES`] camera rays over the pixel (one in each of as many rows and
+/// columns) sees a point sealed in a crevice.
+fn sees_a_crevice(
+    frame: &Frame,
+    tracer: &Tracer,
+    (corner, (width, height)): (Vec2, (u32, u32)),
+    r: &mut impl Rng,
+) -> bool {
+    let mut rows: Vec<u32> = (0..PROBES).collect();
+    for k in (1..PROBES as usize).rev() {
+        rows.swap(k, r.random_range(0..=k));
+    }
+    rows.iter().enumerate().any(|(k, &row)| {
+        let sub = Vec2::new(
+            (k as f32 + r.random::<f32>()) / PROBES as f32,
+            (row as f32 + r.random::<f32>()) / PROBES as f32,
+        );
+        let d = frame.camera.ray_dir(corner + sub, width, height);
+        tracer
+            .intersect(frame.camera.position, d, f32::INFINITY)
+            .is_some_and(|h| {
+                let s = SurfacePoint::seen(frame, &h, d);
+                sealed_at(tracer, s.x, s.n)
+            })
+    })
 }
 
 /// One round of `rays` compensation paths from the pixel whose corner is `corner` in a
@@ -243,7 +301,10 @@ fn round(
     let mut out = Round {
         sum: Vec3::ZERO,
         squares: 0.0,
+        edge: false,
+        sealed: false,
     };
+    let mut plane: Option<(Vec3, f32)> = None;
     for (k, &row) in rows.iter().enumerate() {
         let sub = Vec2::new(
             (k as f32 + r.random::<f32>()) / rays as f32,
@@ -254,8 +315,32 @@ fn round(
             continue;
         };
         let s = SurfacePoint::seen(frame, &h, d);
+        let (n, o) = (
+            frame.normals[s.tri as usize],
+            frame.normals[s.tri as usize].dot(s.x),
+        );
+        match plane {
+            None => plane = Some((n, o)),
+            Some((m, p)) => {
+                let same = m.dot(n) > 0.999 && (p - o).abs() <= tracer.epsilon() * 16.0;
+                out.edge |= !same;
+            }
+        }
         let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
-        let mut l = path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r);
+        let sealed = sealed_at(tracer, s.x, s.n);
+        out.sealed |= sealed;
+        let mut l = if sealed {
+            // SPLIT paths, their first directions stratified in the first one's column.
+            (0..SPLIT)
+                .map(|j| {
+                    let u = Vec2::new(u.x, (j as f32 + r.random::<f32>()) / SPLIT as f32);
+                    path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r)
+                })
+                .sum::<Vec3>()
+                / SPLIT as f32
+        } else {
+            path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r)
+        };
         if !near.vpls.is_empty() {
             let subset = (r.random(), 0, VPLS_AT_HIT);
             l += reflected(frame, tracer, &s, (near, None), subset, true);
@@ -269,6 +354,13 @@ fn round(
 /// One estimate of `L_c` at surface point `s`: a path of at most `bounces` bounces (1: the
 /// first-order term alone) whose first direction is `u` on the hemisphere's square; `nearby`
 /// holds `light`'s VPLs.
+///
+/// A vertex sealed in a crevice ([`sealed_at`]: a ray along its normal meets a surface within
+/// the reach, as between a lamp's top and the ceiling) has its reflected light path traced rather than split between the VPLs and the clamp's share: the path goes on
+/// from it along a hop of any length, picking up the emission it meets, and the VPLs are read
+/// again at the first vertex that is not sealed (docs/math.md, "Into a 1 mm gap"). Such a
+/// vertex ends no path by roulette on an albedo of 1, and a path takes at most
+/// [`SEALED_BOUNCES`] of them besides its `bounces`.
 pub fn path(
     frame: &Frame,
     tracer: &Tracer,
@@ -280,16 +372,22 @@ pub fn path(
     let clamp = light.clamp;
     let mut beta = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
     let (mut x, mut u, mut sum) = (*s, u, Vec3::ZERO);
-    for bounce in 0..bounces.min(MAX_BOUNCES) {
+    // Whether `x` is sealed in a crevice, and the bounces so far from vertices that are not and
+    // that are.
+    let (mut sealed, mut bounce, mut deep) = (false, 0u32, 0u32);
+    while bounce < bounces.min(MAX_BOUNCES) && deep < SEALED_BOUNCES {
         let w = cosine_hemisphere(x.n, u);
-        let Some(h) = tracer.intersect(tracer.offset(x.x, x.n, w), w, clamp) else {
+        let reaches = if sealed { f32::INFINITY } else { clamp };
+        let Some(h) = tracer.intersect(tracer.offset(x.x, x.n, w), w, reaches) else {
             break;
         };
-        let weight = 1.0 - (h.t / clamp).powi(2);
-        if weight <= 0.0 {
-            break;
+        if !sealed {
+            let weight = 1.0 - (h.t / clamp).powi(2);
+            if weight <= 0.0 {
+                break;
+            }
+            beta *= weight;
         }
-        beta *= weight;
         let y = SurfacePoint::seen(frame, &h, w);
         let front = frame.normals[h.tri as usize].dot(w) < 0.0;
         let le = if front {
@@ -297,27 +395,44 @@ pub fn path(
         } else {
             Vec3::ZERO
         };
-        // The first hit sums every emitter sample and VPLS_AT_HIT VPLs; later ones (inside a
-        // crevice, hundreds) one emitter sample and a few VPLs, each standing for the rest.
-        let (samples, vpls) = if bounce == 0 {
-            (usize::MAX, VPLS_AT_HIT)
-        } else {
-            (1, VPLS_LATER)
-        };
-        let subset = (r.random(), samples, vpls);
-        let l = reflected(frame, tracer, &y, (light, Some(nearby)), subset, false);
-        sum += beta * (le + l);
+        let y_sealed = bounces > 1 && sealed_at(tracer, y.x, y.n);
         let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
-        beta *= rho;
-        let q = beta.max_element().min(ROULETTE);
+        let q = if y_sealed {
+            // Its light, path traced: the emission here and, on the next hop, what it sees.
+            sum += beta * le;
+            deep += 1;
+            beta *= rho;
+            rho.max_element().min(1.0)
+        } else {
+            // The first hit sums every emitter sample and VPLS_AT_HIT VPLs; later ones (inside
+            // a crevice, hundreds) one emitter sample and a few VPLs, each standing for the
+            // rest.
+            let (samples, vpls) = if bounce == 0 && deep == 0 {
+                (usize::MAX, VPLS_AT_HIT)
+            } else {
+                (1, VPLS_LATER)
+            };
+            let subset = (r.random(), samples, vpls);
+            let l = reflected(frame, tracer, &y, (light, Some(nearby)), subset, false);
+            sum += beta * (le + l);
+            bounce += 1;
+            beta *= rho;
+            beta.max_element().min(ROULETTE)
+        };
         if q <= 0.0 || r.random::<f32>() >= q {
             break;
         }
         beta /= q;
-        (x, u) = (y, Vec2::new(r.random(), r.random()));
+        (x, u, sealed) = (y, Vec2::new(r.random(), r.random()), y_sealed);
     }
     sum
 }
+
+/// Bounces a compensation path takes at most from vertices sealed in a crevice ([`path`]), as
+/// many as the true image's references take at full weight (`--rr-cap-depth 65536`). A walk
+/// from a 1 mm gap's mouth that gets to the lamp's middle takes tens of thousands: cut at
+/// 16384, the light at the mouth came out 4-8% short (docs/math.md, "Into a 1 mm gap").
+pub const SEALED_BOUNCES: u32 = 1 << 16;
 
 /// The highest probability that a compensation path goes on after a bounce (Russian
 /// roulette on its weight: albedo-1 surfaces closer than the clamp would otherwise keep it
