@@ -161,7 +161,10 @@ pub fn compensate(
 /// compensation, plus the first round's estimate), it traces as many rounds more as bring it
 /// there by the first round's variance, `max_rounds` in all at most, and the estimate is the
 /// mean of all of them. The camera's view into a gap's mouth (`tests/gpu/thin_gap.rs`) is
-/// such a pixel: the few of its paths that go deep into the gap carry most of its light.
+/// such a pixel: the few of its paths that go deep into the gap carry most of its light. A
+/// pixel that sees into a crevice (a walker: its first round saw a sealed point, its finer rays
+/// found one, or its walks used up its share of [`PILOT_WALKS`]) traces all its rounds again,
+/// its first one not kept, with its share of [`WALKS`].
 /// (The number of rounds depends on the first round's samples, which the mean keeps, so where
 /// it varies from seed to seed the estimate is biased, as any adaptive sampling that keeps its
 /// pilot; docs/math.md, "Rounds of compensation paths", measures it.)
@@ -194,20 +197,24 @@ pub fn compensate_in_rounds(
     };
     let nearby = Nearby::new(light.vpls, tracer);
     let lights = (light, &near, &nearby);
-    (0..(width * height) as usize)
+    let pixels = (width * height) as usize;
+    let most = max_rounds.max(1);
+    // The first rounds, each pixel's walks in crevices held to its share of PILOT_WALKS.
+    let pilot = (PILOT_WALKS / pixels.max(1) as u64).clamp(16, SEALED_BOUNCES as u64) as u32;
+    let pilots: Vec<Pilot> = (0..pixels)
         .into_par_iter()
-        .filter_map(|i| {
+        .map(|i| {
             let mut r = rng(&[seed, i as u64, 0xc1a3]);
             let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
             let pixel = (corner, (width, height));
-            let first = round(frame, tracer, pixel, lights, rays, &mut r);
+            let mut budget = pilot;
+            let first = round(frame, tracer, pixel, lights, rays, &mut budget, &mut r);
             let n = rays as f32;
             let mean = luminance(first.sum) / n;
             let variance = ((first.squares / n - mean * mean) * n / (n - 1.0).max(1.0)).max(0.0);
             let value = seen.get(i).map_or(0.0, |&c| luminance(c)) + mean;
             // The paths for a standard error of TARGET_ERROR of the pixel's value, in rounds.
             let wanted = variance / (TARGET_ERROR * value).max(1e-12).powi(2) / n;
-            let most = max_rounds.max(1);
             let mut rounds = if wanted.is_finite() {
                 wanted.ceil().clamp(1.0, most as f32) as u32
             } else {
@@ -216,17 +223,64 @@ pub fn compensate_in_rounds(
             // A pixel across an edge may see into a crevice through a sliver thinner than
             // its paths' strata (a 1 mm gap's mouth at 32 x 32 is a hundredth of a pixel),
             // which its first round may miss: if finer camera rays find it, all rounds.
+            let mut walks = first.sealed;
             if first.edge && !first.sealed && sees_a_crevice(frame, tracer, pixel, &mut r) {
-                rounds = most;
+                (rounds, walks) = (most, true);
             }
-            let mut sum = first.sum;
-            for _ in 1..rounds {
-                sum += round(frame, tracer, pixel, lights, rays, &mut r).sum;
+            // Its walks cut short by the pilot's share: they go again with a walker's share.
+            walks |= budget == 0;
+            Pilot {
+                r,
+                sum: first.sum,
+                rounds,
+                walks,
+                used: (pilot - budget) as u64,
             }
-            (sum != Vec3::ZERO).then(|| (i, sum / (rounds * rays) as f32, rounds))
+        })
+        .collect();
+    // The pixels that see into a crevice trace all their rounds again, sharing what is left
+    // of PILOT_WALKS + WALKS evenly; the others go on from their first round.
+    let used: u64 = pilots.iter().map(|p| p.used).sum();
+    let walkers = pilots.iter().filter(|p| p.walks).count().max(1) as u64;
+    let share = ((PILOT_WALKS + WALKS).saturating_sub(used) / walkers)
+        .clamp(pilot as u64, u32::MAX as u64) as u32;
+    pilots
+        .into_par_iter()
+        .enumerate()
+        .filter_map(|(i, mut p)| {
+            let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
+            let pixel = (corner, (width, height));
+            let mut budget = if p.walks { share } else { pilot };
+            let (mut sum, first) = if p.walks { (Vec3::ZERO, 0) } else { (p.sum, 1) };
+            for _ in first..p.rounds {
+                sum += round(frame, tracer, pixel, lights, rays, &mut budget, &mut p.r).sum;
+            }
+            (sum != Vec3::ZERO).then(|| (i, sum / (p.rounds * rays) as f32, p.rounds))
         })
         .collect()
 }
+
+/// A pixel's first round: its random numbers after it, its sum, the rounds it takes, whether
+/// it sees into a crevice, and the sealed bounces its walks took.
+struct Pilot {
+    r: rand_pcg::Pcg32,
+    sum: Vec3,
+    rounds: u32,
+    walks: bool,
+    used: u64,
+}
+
+/// Sealed bounces (steps of walks in crevices, [`path`]) that a frame's first rounds take at
+/// most, shared evenly among its pixels (at least 16 a pixel).
+pub const PILOT_WALKS: u64 = 1 << 24;
+
+/// Sealed bounces that a frame's pixels that see into a crevice take at most besides what the
+/// first rounds took of [`PILOT_WALKS`], shared evenly among them: a frame's walks end within
+/// about 2^27 + 2^26 bounces, whatever it sees. A 1 mm gap's box at 256 x 256 took 11.5 million
+/// over its 52 pixels that see into the gap (at most 0.61 million one), at 32 x 32 0.34
+/// million; where a walk runs out of its pixel's share, its vertices are read as those outside
+/// a crevice.
+pub const WALKS: u64 = 1 << 25;
 
 /// A round's sum of its paths' estimates and of their luminances' squares; whether its
 /// camera points lie on more than one plane (`edge`), and whether one was sealed in a crevice.
@@ -292,6 +346,7 @@ fn round(
     (corner, (width, height)): (Vec2, (u32, u32)),
     (light, near, nearby): (&Light, &Light, &Nearby),
     rays: u32,
+    budget: &mut u32,
     r: &mut impl Rng,
 ) -> Round {
     let mut rows: Vec<u32> = (0..rays).collect();
@@ -327,19 +382,35 @@ fn round(
             }
         }
         let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
-        let sealed = sealed_at(tracer, s.x, s.n);
+        let sealed = *budget > 0 && sealed_at(tracer, s.x, s.n);
         out.sealed |= sealed;
         let mut l = if sealed {
             // SPLIT paths, their first directions stratified in the first one's column.
             (0..SPLIT)
                 .map(|j| {
                     let u = Vec2::new(u.x, (j as f32 + r.random::<f32>()) / SPLIT as f32);
-                    path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r)
+                    walk(
+                        frame,
+                        tracer,
+                        &s,
+                        (light, nearby),
+                        (u, MAX_BOUNCES),
+                        budget,
+                        r,
+                    )
                 })
                 .sum::<Vec3>()
                 / SPLIT as f32
         } else {
-            path(frame, tracer, &s, (light, nearby), (u, MAX_BOUNCES), r)
+            walk(
+                frame,
+                tracer,
+                &s,
+                (light, nearby),
+                (u, MAX_BOUNCES),
+                budget,
+                r,
+            )
         };
         if !near.vpls.is_empty() {
             let subset = (r.random(), 0, VPLS_AT_HIT);
@@ -369,6 +440,29 @@ pub fn path(
     (u, bounces): (Vec2, u32),
     r: &mut impl Rng,
 ) -> Vec3 {
+    let mut budget = SEALED_BOUNCES;
+    walk(
+        frame,
+        tracer,
+        s,
+        (light, nearby),
+        (u, bounces),
+        &mut budget,
+        r,
+    )
+}
+
+/// [`path`], its sealed bounces taken from `budget` (none left: its vertices are read as those
+/// outside a crevice).
+fn walk(
+    frame: &Frame,
+    tracer: &Tracer,
+    s: &SurfacePoint,
+    (light, nearby): (&Light, &Nearby),
+    (u, bounces): (Vec2, u32),
+    budget: &mut u32,
+    r: &mut impl Rng,
+) -> Vec3 {
     let clamp = light.clamp;
     let mut beta = frame.albedo_at(s.tri as usize, s.b.x, s.b.y);
     let (mut x, mut u, mut sum) = (*s, u, Vec3::ZERO);
@@ -395,12 +489,13 @@ pub fn path(
         } else {
             Vec3::ZERO
         };
-        let y_sealed = bounces > 1 && sealed_at(tracer, y.x, y.n);
+        let y_sealed = bounces > 1 && *budget > 0 && sealed_at(tracer, y.x, y.n);
         let rho = frame.albedo_at(y.tri as usize, y.b.x, y.b.y);
         let q = if y_sealed {
             // Its light, path traced: the emission here and, on the next hop, what it sees.
             sum += beta * le;
             deep += 1;
+            *budget -= 1;
             beta *= rho;
             rho.max_element().min(1.0)
         } else {
