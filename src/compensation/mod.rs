@@ -275,8 +275,8 @@ struct Pilot {
 pub const PILOT_WALKS: u64 = 1 << 24;
 
 /// Sealed bounces that a frame's pixels that see into a crevice take at most besides what the
-/// first rounds took of [`PILOT_WALKS`], shared evenly among them: a frame's walks end within
-/// about 2^27 + 2^26 bounces, whatever it sees. A 1 mm gap's box at 256 x 256 took 11.5 million
+/// first rounds took of [`PILOT_WALKS`], shared evenly among them (each at least its first
+/// round's share): a frame's walks end within about 2^25 + 2^24 bounces, whatever it sees. A 1 mm gap's box at 256 x 256 took 11.5 million
 /// over its 52 pixels that see into the gap (at most 0.61 million one), at 32 x 32 0.34
 /// million; where a walk runs out of its pixel's share, its vertices are read as those outside
 /// a crevice.
@@ -377,7 +377,14 @@ fn round(
         match plane {
             None => plane = Some((n, o)),
             Some((m, p)) => {
-                let same = m.dot(n) > 0.999 && (p - o).abs() <= tracer.epsilon() * 16.0;
+                // Another plane: turned by more than 25 degrees (not the facets of one smooth
+                // surface), or parallel and a tenth of the reach away.
+                let c = m.dot(n);
+                let same = if c > 0.999 {
+                    (p - o).abs() <= 0.1 * crate::vpl::crevice::REACH * tracer.size()
+                } else {
+                    c > 0.9
+                };
                 out.edge |= !same;
             }
         }
@@ -427,9 +434,10 @@ fn round(
 /// holds `light`'s VPLs.
 ///
 /// A vertex sealed in a crevice ([`sealed_at`]: a ray along its normal meets a surface within
-/// the reach, as between a lamp's top and the ceiling) has its reflected light path traced rather than split between the VPLs and the clamp's share: the path goes on
-/// from it along a hop of any length, picking up the emission it meets, and the VPLs are read
-/// again at the first vertex that is not sealed (docs/math.md, "Into a 1 mm gap"). Such a
+/// the reach, as between a lamp's top and the ceiling) has its reflected light path traced
+/// rather than split between the VPLs and the clamp's share: the path goes on from it along a
+/// hop of any length, picking up the emission it meets, and the VPLs are read again at the
+/// first vertex that is not sealed (docs/math.md, "Into a 1 mm gap"). Such a
 /// vertex ends no path by roulette on an albedo of 1, and a path takes at most
 /// [`SEALED_BOUNCES`] of them besides its `bounces`.
 pub fn path(
