@@ -201,12 +201,16 @@ pub fn compensate_in_rounds(
     let most = max_rounds.max(1);
     // The first rounds, each pixel's walks in crevices held to its share of PILOT_WALKS.
     let pilot = (PILOT_WALKS / pixels.max(1) as u64).clamp(16, SEALED_BOUNCES as u64) as u32;
+    // Pixel i's corner and the image's size, as `round` takes them.
+    let pixel_of = |i: usize| {
+        let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
+        (corner, (width, height))
+    };
     let pilots: Vec<Pilot> = (0..pixels)
         .into_par_iter()
         .map(|i| {
             let mut r = rng(&[seed, i as u64, 0xc1a3]);
-            let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
-            let pixel = (corner, (width, height));
+            let pixel = pixel_of(i);
             let mut budget = pilot;
             let first = round(frame, tracer, pixel, lights, rays, &mut budget, &mut r);
             let n = rays as f32;
@@ -248,8 +252,7 @@ pub fn compensate_in_rounds(
         .into_par_iter()
         .enumerate()
         .filter_map(|(i, mut p)| {
-            let corner = Vec2::new((i % width as usize) as f32, (i / width as usize) as f32);
-            let pixel = (corner, (width, height));
+            let pixel = pixel_of(i);
             let mut budget = if p.walks { share } else { pilot };
             let (mut sum, first) = if p.walks { (Vec3::ZERO, 0) } else { (p.sum, 1) };
             for _ in first..p.rounds {
@@ -391,34 +394,28 @@ fn round(
         let u = Vec2::new((k as f32 + r.random::<f32>()) / rays as f32, r.random());
         let sealed = *budget > 0 && sealed_at(tracer, s.x, s.n);
         out.sealed |= sealed;
-        let mut l = if sealed {
-            // SPLIT paths, their first directions stratified in the first one's column.
-            (0..SPLIT)
-                .map(|j| {
-                    let u = Vec2::new(u.x, (j as f32 + r.random::<f32>()) / SPLIT as f32);
-                    walk(
-                        frame,
-                        tracer,
-                        &s,
-                        (light, nearby),
-                        (u, MAX_BOUNCES),
-                        budget,
-                        r,
-                    )
-                })
-                .sum::<Vec3>()
-                / SPLIT as f32
-        } else {
-            walk(
-                frame,
-                tracer,
-                &s,
-                (light, nearby),
-                (u, MAX_BOUNCES),
-                budget,
-                r,
-            )
-        };
+        // SPLIT paths from a sealed point, their first directions stratified in the first
+        // one's column; one from any other.
+        let paths = if sealed { SPLIT } else { 1 };
+        let mut l = (0..paths)
+            .map(|j| {
+                let u = if sealed {
+                    Vec2::new(u.x, (j as f32 + r.random::<f32>()) / SPLIT as f32)
+                } else {
+                    u
+                };
+                walk(
+                    frame,
+                    tracer,
+                    &s,
+                    (light, nearby),
+                    (u, MAX_BOUNCES),
+                    budget,
+                    r,
+                )
+            })
+            .sum::<Vec3>()
+            / paths as f32;
         if !near.vpls.is_empty() {
             let subset = (r.random(), 0, VPLS_AT_HIT);
             l += reflected(frame, tracer, &s, (near, None), subset, true);

@@ -114,14 +114,9 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
     }
 }
 
-/// A scene that is all crevice: two albedo-1 plates 2 m across, 1 mm apart, and a lamp
-/// between them. Every light path bounces between the plates until the 16384-bounce cut (its
-/// coin tossed at every 16th vertex past bounce 256, `vpl::paths::DEEP`), and every vertex is
-/// the compensation's (no ray of it gets out), so its VPLs take no slot: a frame's paths stop
-/// at `NEAR_SLOTS` VPLs a slot (207 paths here, 2 s), where they would otherwise go on to 64
-/// paths a slot (65,536 paths of 16384 bounces).
-#[test]
-fn a_scene_all_crevice_stops_its_light_paths() {
+/// Two albedo-1 plates 2 m across, 1 mm apart (y = 0 and 0.001), and a 10 cm lamp between
+/// them facing down: a scene that is all crevice.
+fn all_crevice() -> Quads {
     let mut q = Quads::default();
     let white = q.material(1.0, 0.0, true);
     let lamp = q.material(1.0, 10.0, false);
@@ -135,7 +130,18 @@ fn a_scene_all_crevice_stops_its_light_paths() {
         lamp,
         json!({}),
     );
-    let scene = load(&q.finish());
+    q
+}
+
+/// A scene that is all crevice: two albedo-1 plates 2 m across, 1 mm apart, and a lamp
+/// between them. Every light path bounces between the plates until the 16384-bounce cut (its
+/// coin tossed at every 16th vertex past bounce 256, `vpl::paths::DEEP`), and every vertex is
+/// the compensation's (no ray of it gets out), so its VPLs take no slot: a frame's paths stop
+/// at `NEAR_SLOTS` VPLs a slot (207 paths here, 2 s), where they would otherwise go on to 64
+/// paths a slot (65,536 paths of 16384 bounces).
+#[test]
+fn a_scene_all_crevice_stops_its_light_paths() {
+    let scene = load(&all_crevice().finish());
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
     let mut cfg = crate::common::render_config();
@@ -172,19 +178,7 @@ fn a_scene_all_crevice_stops_its_light_paths() {
 #[test]
 fn a_camera_inside_a_crevice_gets_its_compensation_in_bounded_time() {
     use irad::compensation::{compensate_in_rounds, Light, MAX_ROUNDS};
-    let mut q = Quads::default();
-    let white = q.material(1.0, 0.0, true);
-    let lamp = q.material(1.0, 10.0, false);
-    let (u, v) = ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
-    q.quad([0.0, 0.0, 0.0], v, u, white, json!({}));
-    q.quad([0.0, 0.001, 0.0], u, v, white, json!({}));
-    q.quad(
-        [0.0, 0.0002, 0.0],
-        [0.05, 0.0, 0.0],
-        [0.0, 0.0, -0.05],
-        lamp,
-        json!({}),
-    );
+    let mut q = all_crevice();
     q.camera([0.0, 0.0005, 0.9], 0.5);
     let scene = load(&q.finish());
     let frame = scene.at(0.0);
