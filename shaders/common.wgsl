@@ -22,11 +22,42 @@ struct Surface {
 }
 
 // A VPL: position, unit normal (facing where its light arrived from), and its weighted flux
-// `power * albedo_y * weight` (RGB).
+// `power * albedo_y * weight` (RGB). A VPL on the way out of a crevice has in the w's
+// (pos.w, normal.w, flux.w) its fan's plane normal (zeros for any other VPL; `vpl_lobe`).
 struct GpuVpl {
     pos: vec4f,
     normal: vec4f,
     flux: vec4f,
+}
+
+// How a VPL's light falls off toward the unit direction `w` it leaves along: the cosine to its
+// normal, or for a VPL on the way out of a crevice pi times its fan's density (the CPU's
+// `ShadedVpl::lobe` and `vpl::fan_lobe`).
+fn vpl_lobe(v: GpuVpl, w: vec3f) -> f32 {
+    let nf = vec3f(v.pos.w, v.normal.w, v.flux.w);
+    let d = v.normal.xyz;
+    if all(nf == vec3f(0.0)) {
+        return dot(d, w);
+    }
+    let sd = dot(d, nf);
+    let sw = dot(w, nf);
+    if sd <= 0.0 || sw <= 0.0 {
+        return 0.0;
+    }
+    let ed = asin(min(sd, 1.0));
+    let h = min(ed, 0.5 * PI - ed);
+    if h <= 0.0 || abs(asin(min(sw, 1.0)) - ed) >= h {
+        return 0.0;
+    }
+    let a = d - nf * sd;
+    let b = w - nf * sw;
+    let la = length(a);
+    let lb2 = dot(b, b);
+    let ab = dot(a, b);
+    if ab <= 0.0 || la <= 0.0 || lb2 <= 0.0 {
+        return 0.0;
+    }
+    return PI * ab / (la * lb2) / (4.0 * h);
 }
 
 // An emitter sample for direct light: position, unit normal, and `Le / (pdf * count)`.

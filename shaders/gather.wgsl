@@ -73,7 +73,7 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
         let dist = sqrt(d2);
         let w = d / dist;
         let cos_x = dot(n, w);
-        let cos_y = -dot(v.normal.xyz, w);
+        let cos_y = vpl_lobe(v, -w);
         if cos_x <= 0.0 || cos_y <= 0.0 {
             continue;
         }

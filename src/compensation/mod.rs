@@ -682,6 +682,7 @@ mod tests {
                     normal: Vec3::Y,
                     flux: Vec3::ONE,
                     near: None,
+                    fan: None,
                 })
                 .collect();
             let g = Nearby::new(&vpls, &tracer);

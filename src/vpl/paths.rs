@@ -32,7 +32,8 @@ pub const MAX_DEPTH: u32 = 16384;
 /// a 1 mm gap a path bounces thousands of times, and the coin at each bounce cost 17 rays where
 /// the bounce now costs two. The VPLs of such a stretch are the compensation's (the crevice's
 /// inside), a sixteenth of them kept at their own power: the light they would add inside the
-/// gap past this bounce is left out (docs/math.md, "Out of a 1 mm gap").
+/// gap past this bounce is left out (docs/math.md, "Out of a 1 mm gap"). What a skipped vertex
+/// sends out of the crevice is not: a hop out from it leaves a VPL on its way out ([`EXIT`]).
 pub const DEEP: u32 = 256;
 
 /// The stride of the coin deep in a crevice ([`DEEP`]).
@@ -61,6 +62,11 @@ pub struct Vpl {
     /// the compensation, with exact visibility, reads it (at the point a pixel sees, within
     /// this distance); the GPU's gather does not.
     pub near: Option<f32>,
+    /// A VPL on the way out of a crevice ([`EXIT`]): the normal of the crevice's vertex the
+    /// path left from, facing into the crevice; its light leaves in a fan about the crevice's
+    /// plane, on this side of it ([`crate::vpl::fan_lobe`]), not in a cosine lobe about
+    /// [`Vpl::normal`] (the direction the path left along).
+    pub fan: Option<Vec3>,
 }
 
 /// Traces light path `path` of stream `seed` in `frame`, returning its VPLs (possibly none).
@@ -110,9 +116,9 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     let reach = super::crevice::REACH * tracer.size();
     // The last vertex was in a crevice (by its coin, or its coin skipped deep in one).
     let mut in_crevice = false;
-    // The path's last vertex, its normal (facing the side the light arrived from), and whether
-    // its own coin found it sealed (None: its coin was not tossed).
-    let mut last: Option<(Vec3, Vec3, Option<bool>)> = None;
+    // The normal of the path's last vertex (facing the side the light arrived from), and
+    // whether its own coin found it sealed (None: its coin was not tossed).
+    let mut last: Option<(Vec3, Option<bool>)> = None;
     for depth in 1..=MAX_DEPTH {
         let Some(h) = tracer.intersect_light(origin, dir, f32::INFINITY) else {
             break;
@@ -147,25 +153,26 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
                 .is_some();
         let coin = (!skipped).then(|| super::crevice::coin(tracer, x, nf, (seed, path, depth)));
         let crevice = coin.is_none_or(|c| c.crevice);
-        // Out of a crevice from a vertex sealed in it (none of its coin's rays got out): the
-        // light of that vertex lit what the path now reaches through the crevice's mouth, which
-        // the GPU cannot resolve, and the vertex's VPL is the compensation's, read within the
-        // reach. So the light it sends out is a VPL of its own where the hop is out of the
-        // crevice, facing along it (docs/math.md, "Out of a 1 mm gap").
+        // Out of a crevice from a vertex sealed in it (none of its coin's rays got out), or
+        // from one deep in it whose coin was skipped (it left no VPL): the light of that
+        // vertex lit what the path now reaches through the crevice's mouth, which the GPU
+        // cannot resolve, and no VPL of the GPU's carries it. So the light it sends out is a
+        // VPL of its own where the hop is out of the crevice, with the path's direction and
+        // that vertex's normal: its light leaves in a fan about the crevice's plane
+        // (`vpl::fan_lobe`; docs/math.md, "Out of a 1 mm gap").
         let exit = match last {
-            Some((y, n, was_sealed)) if in_crevice && hop_out && !crevice => {
-                // Sealed by its own coin (tossed now if it was skipped: the coin of a vertex is
-                // the same whenever it is tossed).
-                let sealed_y = was_sealed.unwrap_or_else(|| {
-                    super::crevice::coin(tracer, y, n, (seed, path, depth - 1)).sealed
-                });
-                sealed_y
+            Some((n, was_sealed)) if in_crevice && hop_out && !crevice => {
+                // Sealed by its coin, or skipped (None): its light reaches the room this way
+                // alone. One with a ray out has its own VPL, for the GPU (or no VPL, by its coin).
+                was_sealed
+                    .unwrap_or(true)
                     .then(|| way_out(tracer, (origin, dir, h.t), n, reach))
                     .flatten()
+                    .map(|m| (m, n))
             }
             _ => None,
         };
-        if let Some(position) = exit {
+        if let Some((position, n)) = exit {
             out.push(Vpl {
                 position,
                 normal: dir,
@@ -175,10 +182,11 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
                 path,
                 tri: h.tri,
                 near: None,
+                fan: Some(n),
             });
         }
         in_crevice = crevice;
-        last = Some((x, nf, coin.map(|c| c.sealed)));
+        last = Some((nf, coin.map(|c| c.sealed)));
         if let Some((p, near)) = coin.and_then(|c| c.kept) {
             out.push(Vpl {
                 position: x,
@@ -189,6 +197,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
                 path,
                 tri: h.tri,
                 near,
+                fan: None,
             });
         }
         // Russian roulette on albedo, at most 0.99 but in a crevice: the light there has no

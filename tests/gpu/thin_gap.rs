@@ -425,19 +425,21 @@ fn the_gap_sweep_against_the_reference() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    // Measured (docs/math.md, "Into a 1 mm gap"): the largest relMSE 0.049 and 0.047 at 1 cm,
-    // 0.031 at 0.1 mm and less, the mean bias -2.1% to +2.2%; at 1 mm, on 4 x 4 blocks against
-    // the true image, 0.032 and 0.033, the mean -8.1% and -6.5% (seeds -13.8% to +3.7%: the
-    // gap's mouth, ONE_MM_SHORT). Before the compensation walked the gap (stop 48), 0.052 and
-    // 0.050 at 1 mm, 27-29% under; before light paths followed the gap's light out (1024
-    // bounces), 0.060-0.076 on blocks.
+    // Measured (docs/math.md, "Out of a 1 mm gap, in a fan"): the largest relMSE 0.049 and
+    // 0.047 at 1 cm, 0.031 at 0.1 mm and less, the mean bias -2.1% to +2.2%; at 1 mm, on 4 x 4
+    // blocks against the true image, 0.033 and 0.032, the mean -6.4% and -5.2% (seeds -12.3%
+    // to +4.5%: the gap's mouth, ONE_MM_SHORT). With cosine lobes on the way out, and none
+    // from the vertices deep in the gap whose coin was skipped (stop 49), -8.1% and -6.5%;
+    // before the compensation walked the gap (stop 48), 0.052 and 0.050 at 1 mm, 27-29% under;
+    // before light paths followed the gap's light out (1024 bounces), 0.060-0.076 on blocks.
     assert_rows(&rows, [0.05, 0.045, 0.035]);
 }
 
-/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Into a 1 mm
-/// gap"): the largest relMSE 0.037 and 0.040 at 1 cm, 0.023 and less below, the mean bias -3.1%
-/// to +1.6%; at 1 mm, on blocks against the true image, 0.029 and 0.033, the mean -8.7% and
-/// -7.0% (before the compensation walked the gap, 0.049 and 0.050, 27-29% under).
+/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Out of a 1 mm
+/// gap, in a fan"): the largest relMSE 0.035 and 0.048 at 1 cm (0.037 and 0.040 with cosine
+/// lobes on the way out), 0.023 and less below, the mean bias -3.1% to +1.8%; at 1 mm, on
+/// blocks against the true image, 0.029 and 0.028, the mean -6.5% and -4.6% (stop 49: -8.7%
+/// and -7.0%; before the compensation walked the gap, 0.049 and 0.050, 27-29% under).
 #[test]
 fn the_gap_sweep_with_the_default_sampler() {
     let rows = sweep(
@@ -445,15 +447,16 @@ fn the_gap_sweep_with_the_default_sampler() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    assert_rows(&rows, [0.045, 0.045, 0.03]);
+    assert_rows(&rows, [0.05, 0.045, 0.03]);
 }
 
 /// How far under the true image the 1 mm rows' mean may be: issue 23 asks for 5%. With the
-/// compensation walking the gap (docs/math.md, "Into a 1 mm gap") the rows are 6.5-8.7% under
-/// it over seeds 1-4, a seed alone -14% to +4%: the few camera rays a pixel sends into the
-/// gap's mouth, whose light varies by several times its mean, and the band below the lamp (the
-/// corner of the back wall and the ceiling at three quarters of its light). Before, 27-29%.
-const ONE_MM_SHORT: f64 = 0.10;
+/// light out of the gap in fans (docs/math.md, "Out of a 1 mm gap, in a fan") the rows are
+/// 4.6-6.5% under it over seeds 1-4, a seed alone -13% to +5%: the few camera rays a pixel
+/// sends into the gap's mouth, whose light varies by several times its mean. Over 16 seeds
+/// (`the_one_mm_rows_over_16_seeds`) the means are -0.4% to -4.2%. Stop 49: 6.5-8.7% under;
+/// stop 48: 27-29%.
+const ONE_MM_SHORT: f64 = 0.08;
 
 /// Every row's largest relMSE within its bound (`[1 cm, 1 mm, the gaps below]`) and its mean
 /// bias within 5% (at 1 mm, at most 5% over and [`ONE_MM_SHORT`] under).
@@ -614,11 +617,13 @@ fn a_closed_lamps_light_paths_start_outside_it() {
 /// (`vpl::paths::DEEP`, `vpl::paths::EXIT`; docs/math.md, "Out of a 1 mm gap"). Of the lamp's
 /// light, its top's share (0.2 m^2 of its 0.508) goes into the gap, and nearly all of it leaves
 /// within the 16384 bounces a path may now take (98.5% in the model of `benches/gap_escape.py`;
-/// 42% within the 1024 before). A path that leaves from a vertex sealed in the gap leaves a VPL
-/// on its way out: beyond the lamp's top, facing out across its edge, with the power the path
-/// carries. Over 4000 paths (seed 1) those VPLs carry 0.267 (double-sided) and 0.271 of the
-/// lamp top's light, the rest leaving from vertices at the mouth with a way out, whose own VPLs
-/// carry it; with paths of 1024 bounces, 0.081 and 0.082.
+/// 42% within the 1024 before). A path that leaves from a vertex sealed in the gap, or from one
+/// deep in it whose coin was skipped, leaves a VPL on its way out: beyond the lamp's top,
+/// leaving out across its edge with the power the path carries, its light in a fan about the
+/// plates' plane (`vpl::fan_lobe`). Over 4000 paths (seed 1) those VPLs carry 0.407
+/// (double-sided) and 0.411 of the lamp top's light, the rest leaving from vertices at the
+/// mouth with a way out, whose own VPLs carry it; from sealed vertices alone (stop 49), 0.267
+/// and 0.271; with paths of 1024 bounces, 0.081 and 0.082.
 #[test]
 fn a_one_mm_gaps_light_gets_out_on_the_light_paths() {
     use irad::vpl::paths::EXIT;
@@ -648,9 +653,11 @@ fn a_one_mm_gaps_light_gets_out_on_the_light_paths() {
                     "exit VPL at {p} facing {}",
                     v.normal
                 );
+                // Its fan about the plates' plane, on the side the path left to.
+                let fan = v.fan.expect("an exit VPL without its fan");
                 assert!(
-                    v.normal.dot(out) > 0.0,
-                    "exit VPL at {p} facing {}",
+                    fan.y.abs() > 0.999 && v.normal.dot(fan) > 0.0,
+                    "exit VPL at {p} leaving along {} with its fan about {fan}",
                     v.normal
                 );
             }
@@ -661,7 +668,7 @@ fn a_one_mm_gaps_light_gets_out_on_the_light_paths() {
             "double-sided {double}: {exits} VPLs on the way out of {paths} paths, their power \
              over the lamp top's {share:.3}"
         );
-        assert!((0.22..=0.32).contains(&share), "{share}");
+        assert!((0.35..=0.46).contains(&share), "{share}");
     }
 }
 

@@ -378,13 +378,16 @@ impl Renderer {
     /// Uploads the VPLs if any changed and the (slot, point offset) list of the slots whose
     /// ISM tile must be drawn again; returns those slots and whether the VPLs were uploaded.
     fn upload_vpls(&mut self, shaded: &[ShadedVpl], still: bool) -> (Vec<u32>, bool) {
-        let v4 = |v: Vec3| v.extend(0.0).to_array();
         let vpls: Vec<GpuVpl> = shaded
             .iter()
-            .map(|v| GpuVpl {
-                pos: v4(v.position),
-                normal: v4(v.normal),
-                flux: v4(v.flux),
+            .map(|v| {
+                // A fan's plane normal in the w's (`common.wgsl`, `GpuVpl`); zeros: none.
+                let f = v.fan.unwrap_or(Vec3::ZERO);
+                GpuVpl {
+                    pos: v.position.extend(f.x).to_array(),
+                    normal: v.normal.extend(f.y).to_array(),
+                    flux: v.flux.extend(f.z).to_array(),
+                }
             })
             .collect();
         // A slot keeps its ISM tile while the geometry is still and its VPL's position and

@@ -325,6 +325,7 @@ pub(super) fn newborns(
                 path: f * PATHS_PER_FRAME + i as u64,
                 tri: 0,
                 near: None,
+                fan: None,
             }),
         };
         out.born.push((pa, vs, imp));
