@@ -312,6 +312,24 @@ fn sealed_at(tracer: &Tracer, x: Vec3, n: Vec3) -> bool {
     tracer.intersect(tracer.offset(x, n, n), n, reach).is_some()
 }
 
+/// The rows of a pixel's `n` x `n` Latin hypercube, shuffled: point k lies in column k and row
+/// `rows[k]` ([`latin_cell`]), so `n` points cover every row and every column once.
+fn shuffled_rows(n: u32, r: &mut impl Rng) -> Vec<u32> {
+    let mut rows: Vec<u32> = (0..n).collect();
+    for k in (1..n as usize).rev() {
+        rows.swap(k, r.random_range(0..=k));
+    }
+    rows
+}
+
+/// A uniform point, in pixel units, of cell (column `k`, row `row`) of an `n` x `n` grid.
+fn latin_cell(k: usize, row: u32, n: u32, r: &mut impl Rng) -> Vec2 {
+    Vec2::new(
+        (k as f32 + r.random::<f32>()) / n as f32,
+        (row as f32 + r.random::<f32>()) / n as f32,
+    )
+}
+
 /// Whether one of [`PROBES`] camera rays over the pixel (one in each of as many rows and
 /// columns) sees a point sealed in a crevice.
 fn sees_a_crevice(
@@ -320,15 +338,9 @@ fn sees_a_crevice(
     (corner, (width, height)): (Vec2, (u32, u32)),
     r: &mut impl Rng,
 ) -> bool {
-    let mut rows: Vec<u32> = (0..PROBES).collect();
-    for k in (1..PROBES as usize).rev() {
-        rows.swap(k, r.random_range(0..=k));
-    }
+    let rows = shuffled_rows(PROBES, r);
     rows.iter().enumerate().any(|(k, &row)| {
-        let sub = Vec2::new(
-            (k as f32 + r.random::<f32>()) / PROBES as f32,
-            (row as f32 + r.random::<f32>()) / PROBES as f32,
-        );
+        let sub = latin_cell(k, row, PROBES, r);
         let d = frame.camera.ray_dir(corner + sub, width, height);
         tracer
             .intersect(frame.camera.position, d, f32::INFINITY)
@@ -352,10 +364,7 @@ fn round(
     budget: &mut u32,
     r: &mut impl Rng,
 ) -> Round {
-    let mut rows: Vec<u32> = (0..rays).collect();
-    for k in (1..rays as usize).rev() {
-        rows.swap(k, r.random_range(0..=k));
-    }
+    let rows = shuffled_rows(rays, r);
     let mut out = Round {
         sum: Vec3::ZERO,
         squares: 0.0,
@@ -364,19 +373,14 @@ fn round(
     };
     let mut plane: Option<(Vec3, f32)> = None;
     for (k, &row) in rows.iter().enumerate() {
-        let sub = Vec2::new(
-            (k as f32 + r.random::<f32>()) / rays as f32,
-            (row as f32 + r.random::<f32>()) / rays as f32,
-        );
+        let sub = latin_cell(k, row, rays, r);
         let d = frame.camera.ray_dir(corner + sub, width, height);
         let Some(h) = tracer.intersect(frame.camera.position, d, f32::INFINITY) else {
             continue;
         };
         let s = SurfacePoint::seen(frame, &h, d);
-        let (n, o) = (
-            frame.normals[s.tri as usize],
-            frame.normals[s.tri as usize].dot(s.x),
-        );
+        let n = frame.normals[s.tri as usize];
+        let o = n.dot(s.x);
         match plane {
             None => plane = Some((n, o)),
             Some((m, p)) => {
