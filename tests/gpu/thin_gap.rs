@@ -425,21 +425,24 @@ fn the_gap_sweep_against_the_reference() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    // Measured (docs/math.md, "Out of a 1 mm gap, in a fan"): the largest relMSE 0.049 and
-    // 0.047 at 1 cm, 0.031 at 0.1 mm and less, the mean bias -2.1% to +2.2%; at 1 mm, on 4 x 4
-    // blocks against the true image, 0.033 and 0.032, the mean -6.4% and -5.2% (seeds -12.3%
-    // to +4.5%: the gap's mouth, ONE_MM_SHORT). With cosine lobes on the way out, and none
-    // from the vertices deep in the gap whose coin was skipped (stop 49), -8.1% and -6.5%;
-    // before the compensation walked the gap (stop 48), 0.052 and 0.050 at 1 mm, 27-29% under;
-    // before light paths followed the gap's light out (1024 bounces), 0.060-0.076 on blocks.
-    assert_rows(&rows, [0.05, 0.045, 0.035]);
+    // Measured (docs/math.md, "Into a 1 mm gap, seen in proportion"): the largest relMSE 0.049
+    // and 0.047 at 1 cm (+2.2%, +3.2%), 0.031 at 0.1 mm and less, the mean bias -2.1% to +2.2%;
+    // at 1 mm, on 4 x 4 blocks against the true image, 0.032 and 0.031, the mean -0.5% and
+    // -2.3% (seeds -5.8% to +4.2%; over 16 seeds -4.4% and -3.3%, ONE_MM). With the walkers'
+    // rounds each a hypercube of its own (stop 50), -6.4% and -5.2%; with cosine lobes on the
+    // way out, and none from the vertices deep in the gap whose coin was skipped (stop 49),
+    // -8.1% and -6.5%; before the compensation walked the gap (stop 48), 0.052 and 0.050 at
+    // 1 mm, 27-29% under; before light paths followed the gap's light out (1024 bounces),
+    // 0.060-0.076 on blocks.
+    assert_rows(&rows, [0.05, 0.04, 0.035]);
 }
 
-/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Out of a 1 mm
-/// gap, in a fan"): the largest relMSE 0.035 and 0.048 at 1 cm (0.037 and 0.040 with cosine
-/// lobes on the way out), 0.023 and less below, the mean bias -3.1% to +1.8%; at 1 mm, on
-/// blocks against the true image, 0.029 and 0.028, the mean -6.5% and -4.6% (stop 49: -8.7%
-/// and -7.0%; before the compensation walked the gap, 0.049 and 0.050, 27-29% under).
+/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Into a 1 mm
+/// gap, seen in proportion"): the largest relMSE 0.035 and 0.048 at 1 cm (0.037 and 0.040 with
+/// cosine lobes on the way out), 0.023 and less below, the mean bias -3.1% to +2.2%; at 1 mm,
+/// on blocks against the true image, 0.032 and 0.029, the mean -0.5% and -1.6% (seeds -10.1%
+/// to +4.1%; over 16 seeds -4.5% and -3.3%, ONE_MM). Stop 50: -6.5% and -4.6%; stop 49: -8.7%
+/// and -7.0%; before the compensation walked the gap, 0.049 and 0.050, 27-29% under.
 #[test]
 fn the_gap_sweep_with_the_default_sampler() {
     let rows = sweep(
@@ -447,25 +450,27 @@ fn the_gap_sweep_with_the_default_sampler() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    assert_rows(&rows, [0.05, 0.045, 0.03]);
+    assert_rows(&rows, [0.05, 0.04, 0.03]);
 }
 
-/// How far under the true image the 1 mm rows' mean may be: issue 23 asks for 5%. With the
-/// light out of the gap in fans (docs/math.md, "Out of a 1 mm gap, in a fan") the rows are
-/// 4.6-6.5% under it over seeds 1-4, a seed alone -13% to +5%: the few camera rays a pixel
-/// sends into the gap's mouth, whose light varies by several times its mean. Over 16 seeds
-/// (`the_one_mm_rows_over_16_seeds`) the means are -0.4% to -4.2%. Stop 49: 6.5-8.7% under;
-/// stop 48: 27-29%.
-const ONE_MM_SHORT: f64 = 0.08;
+/// The 1 mm rows' mean bias, as issue 23 asks of every row: within 5% of the true image. Over
+/// seeds 1-4 they are -0.5% to -2.3% (a seed alone -10.1% to +4.2%), but over 16 seeds
+/// (`the_one_mm_rows_over_16_seeds`) -4.5% to -3.3%, each with a standard error of 1.0-1.2%,
+/// and against the mean of 32 true images rather than the judge's 16 (1.7% brighter) the
+/// double-sided `mh` row is 5.9% under over 32 seeds (docs/math.md, "Into a 1 mm gap, seen in
+/// proportion"): seeds 1-4 lie on the lucky side of a row that is 4-6% under. Before the
+/// walkers' rounds were slices of one hypercube (stop 50) seeds 1-4 were 4.6-6.5% under and the
+/// test allowed 8%; stop 49: 6.5-8.7%; stop 48: 27-29%.
+const ONE_MM: f64 = 0.05;
 
 /// Every row's largest relMSE within its bound (`[1 cm, 1 mm, the gaps below]`) and its mean
-/// bias within 5% (at 1 mm, at most 5% over and [`ONE_MM_SHORT`] under).
+/// bias within 5% ([`ONE_MM`] at 1 mm).
 fn assert_rows(rows: &[Row], bounds: [f64; 3]) {
     for (gap, double, e) in rows {
         let (mse, bias) = (largest_mse(e), mean_bias(e));
         let (mse_bound, under) = match *gap {
             g if g >= 0.01 => (bounds[0], 0.05),
-            g if g >= 0.001 => (bounds[1], ONE_MM_SHORT),
+            g if g >= 0.001 => (bounds[1], ONE_MM),
             _ => (bounds[2], 0.05),
         };
         assert!(
@@ -765,7 +770,7 @@ fn every_lamp_of_the_sweep_is_compensated() {
 /// The 1 mm rows over 16 seeds against their judge, the true image ([`judge`], on blocks; a
 /// measurement: `--ignored`, about 5 minutes): the mean bias with its standard error, so that a
 /// bias can be told from the seed-to-seed spread of the gap's mouth (docs/math.md, "Into a 1 mm
-/// gap").
+/// gap, seen in proportion": -4.5% to -3.3%, standard errors 1.0-1.2%, relMSE at most 0.036).
 #[test]
 #[ignore]
 fn the_one_mm_rows_over_16_seeds() {
