@@ -268,17 +268,10 @@ pub fn compensate_in_rounds(
                 Vec::new()
             };
             for j in first..p.rounds {
-                let rows;
-                let points = if p.walks {
-                    let (first, stride) = (j as usize, p.rounds as usize);
-                    Points {
-                        rows: &all,
-                        first,
-                        stride,
-                    }
-                } else {
-                    rows = shuffled_rows(rays, &mut p.r);
-                    Points::all(&rows)
+                let own = (!p.walks).then(|| shuffled_rows(rays, &mut p.r));
+                let points = match &own {
+                    Some(rows) => Points::all(rows),
+                    None => Points::slice(&all, j as usize, p.rounds as usize),
                 };
                 sum += round(frame, tracer, pixel, lights, points, &mut budget, &mut p.r).sum;
             }
@@ -388,14 +381,18 @@ struct Points<'a> {
 }
 
 impl<'a> Points<'a> {
-    /// All the points of the hypercube with `rows`: one round's.
-    fn all(rows: &'a [u32]) -> Self {
-        let (first, stride) = (0, 1);
+    /// Slice `first` (of `stride`) of the hypercube with `rows`.
+    fn slice(rows: &'a [u32], first: usize, stride: usize) -> Self {
         Points {
             rows,
             first,
             stride,
         }
+    }
+
+    /// All the points of the hypercube with `rows`: one round's.
+    fn all(rows: &'a [u32]) -> Self {
+        Points::slice(rows, 0, 1)
     }
 
     /// How many points.
@@ -740,11 +737,7 @@ mod tests {
             let all = shuffled_rows((rays * rounds) as u32, &mut r);
             let mut seen = 0;
             for j in 0..rounds {
-                let points = Points {
-                    rows: &all,
-                    first: j,
-                    stride: rounds,
-                };
+                let points = Points::slice(&all, j, rounds);
                 assert_eq!(points.len(), rays);
                 let mut columns = vec![0; rays];
                 for k in 0..rays {
