@@ -421,10 +421,12 @@ pub fn free_path(frame: &Frame, tracer: &Tracer) -> Option<f32> {
             }
             let dir = crate::math::cosine_hemisphere(side, u);
             let hit = tracer.intersect(tracer.offset(x, n, dir), dir, f32::INFINITY);
-            // Not inside closed meshes, where no light the frame shows goes.
-            if let Some(h) = hit
-                .filter(|h| !tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], dir))
-            {
+            // Not inside closed meshes, where no light the frame shows goes, nor into a gap
+            // thinner than the tracer resolves (`Tracer::seals`).
+            if let Some(h) = hit.filter(|h| {
+                !tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], dir)
+                    && !tracer.seals(n, dir, h.t)
+            }) {
                 d.push(h.t);
             }
         }

@@ -165,7 +165,8 @@ pub fn compensate(
 /// mean of all of them. The camera's view into a gap's mouth (`tests/gpu/thin_gap.rs`) is
 /// such a pixel: the few of its paths that go deep into the gap carry most of its light. A
 /// pixel that sees into a crevice (a walker: its first round saw a sealed point, its finer rays
-/// found one, or its walks used up its share of [`PILOT_WALKS`]) traces all its rounds again,
+/// found one, or its walks used up its share of [`PILOT_WALKS`]) traces all its rounds again
+/// (at least half of `max_rounds`),
 /// its first one not kept, with its share of [`WALKS`], from the slices of one Latin hypercube
 /// over all of them (`Points`): the few of its camera points that see into the crevice are as
 /// many as the sliver it sees through is high, whatever the random numbers.
@@ -239,6 +240,11 @@ pub fn compensate_in_rounds(
             }
             // Its walks cut short by the pilot's share: they go again with a walker's share.
             walks |= budget == 0;
+            // A walker's first round saw the crevice at a point or two: its variance says
+            // little of how many rounds the crevice needs. At least half of them.
+            if walks {
+                rounds = rounds.max(most.div_ceil(2));
+            }
             Pilot {
                 r,
                 sum: first.sum,
@@ -539,6 +545,10 @@ fn walk(
         let Some(h) = tracer.intersect(tracer.offset(x.x, x.n, w), w, reaches) else {
             break;
         };
+        // Into a gap thinner than the tracer resolves: its light does not come back.
+        if tracer.seals(x.n, w, h.t) {
+            break;
+        }
         if !sealed {
             let weight = 1.0 - (h.t / clamp).powi(2);
             if weight <= 0.0 {

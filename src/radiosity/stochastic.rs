@@ -119,7 +119,8 @@ pub fn solve(
                         let o = tracer.offset(x, nrm, d);
                         if let Some(h) = tracer.intersect(o, d, f32::INFINITY) {
                             let j = h.tri as usize;
-                            if mesh.elems[j].normal.dot(d) < 0.0 {
+                            // Not into a gap thinner than the tracer resolves.
+                            if mesh.elems[j].normal.dot(d) < 0.0 && !tracer.seals(nrm, d, h.t) {
                                 got.push((j as u32, w, we));
                             }
                         }

@@ -186,6 +186,8 @@ pub fn radiance_capped_from(
     let mut pdf_bsdf = 0.0f32; // pdf of the direction that reached this vertex (0: camera ray)
     let mut depth = 0u32;
     let env = frame.emitters.environment.as_deref();
+    // The normal of the surface the ray leaves (None: the camera's ray).
+    let mut from: Option<Vec3> = None;
     loop {
         let Some(h) = tracer.intersect(o, d, f32::INFINITY) else {
             // Out to the environment: all of it for a camera ray, else its MIS weight
@@ -202,6 +204,10 @@ pub fn radiance_capped_from(
             }
             break;
         };
+        // Into a gap thinner than the tracer resolves: its light does not come back.
+        if from.is_some_and(|n| tracer.seals(n, d, h.t)) {
+            break;
+        }
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
@@ -265,6 +271,7 @@ pub fn radiance_capped_from(
         d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
         pdf_bsdf = n.dot(d).max(1e-8) / PI;
         o = tracer.offset(x, n, d);
+        from = Some(n);
         beta *= rho;
         depth += 1;
         if depth >= RR_DEPTH {

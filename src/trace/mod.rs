@@ -31,8 +31,9 @@ pub struct Tracer {
     pub builds: usize,
     /// Seconds spent in the last build (0 if the last update kept the BVH).
     pub last_build_s: f64,
-    /// Scale of the scene, for ray offsets: 1e-4 of its size.
-    eps: f32,
+    /// The gap narrower than which two surfaces are one ([`Tracer::seals`]): 1e-4 of the
+    /// scene's size.
+    seal: f32,
     /// The scene's size: its bounding box's largest side.
     size: f32,
     /// The power of two the BVH's coordinates are the frame's times ([`scale_for`]).
@@ -96,6 +97,33 @@ fn barycentrics(t: &Triangle, p: Vec3A) -> (f32, f32) {
 /// an absolute 1e-4 (`cwbvh::node::EPSILON`): in a millimetre-sized scene that is 5% of
 /// it, and a 1e-3-scaled Cornell box rendered 1.1% darker in the reference. Multiplying by a
 /// power of two is exact, so a scene modelled at any scale traces as its unit-sized twin does.
+/// How many units in the last place of the scene's size a ray leaving a surface starts off
+/// it ([`Tracer::epsilon_at`]): 128, 1.5e-5 of the size. Of the size, not of the point's own
+/// coordinates: a ray's distance to a triangle's plane, as the intersection test computes it,
+/// errs by units in the last place of the triangle's extent, more for a sliver, and a triangle
+/// may span the scene (`a_ray_never_hits_the_triangle_it_leaves`: some rays hit their own plane
+/// at 32, none at 64). At 1e-4 of the size, as before stop 52, the offset was a fifth of a 1 mm
+/// gap in a 2 m room and let half as much light again out of it (docs/math.md, "Gaps thinner
+/// than the scene resolves").
+pub const OFFSET_ULPS: f32 = 128.0;
+
+/// And at least this many units in the last place of the point's largest coordinate: a point
+/// interpolated on a triangle lies off its plane by a few of them, and a smaller step would be
+/// lost in rounding the origin. Only beyond 16 times the scene's size from the origin is that
+/// the larger, and the loader moves a scene whose centre lies more than 15 times its size
+/// from the origin to it (`scene::load`), so that a scene's offsets do not depend on where it
+/// sits.
+pub const POINT_ULPS: f32 = 8.0;
+
+/// The offset at `p` in a scene of `size`, with `ulps` units of the size ([`OFFSET_ULPS`]).
+fn epsilon(p: Vec3, size: f32, ulps: f32) -> f32 {
+    f32::EPSILON * (ulps * size).max(POINT_ULPS * p.abs().max_element())
+}
+
+/// The gap, as a share of the scene's size, narrower than which two facing surfaces are one
+/// ([`Tracer::seals`]).
+pub const SEAL: f32 = 1e-4;
+
 fn scale_for(size: f32) -> f32 {
     if !(size > 0.0 && size < 2.0) {
         return 1.0;
@@ -147,7 +175,7 @@ impl Tracer {
             tris,
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
-            eps: 1e-4 * if size > 0.0 { size } else { 1e-3 },
+            seal: SEAL * if size > 0.0 { size } else { 1e-3 },
             size: if size > 0.0 { size } else { 1e-3 },
             k,
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
@@ -269,9 +297,25 @@ impl Tracer {
         self.size
     }
 
-    /// The offset used to move ray origins off surfaces.
-    pub fn epsilon(&self) -> f32 {
-        self.eps
+    /// How far a ray leaving a surface at `p` starts off it ([`Tracer::offset`]):
+    /// [`OFFSET_ULPS`] units in the last place of the scene's size, or [`POINT_ULPS`] of `p`'s
+    /// largest coordinate if that is larger.
+    pub fn epsilon_at(&self, p: Vec3) -> f32 {
+        epsilon(p, self.size, OFFSET_ULPS)
+    }
+
+    /// The gap narrower than which two facing surfaces are one ([`Tracer::seals`]).
+    pub fn seal(&self) -> f32 {
+        self.seal
+    }
+
+    /// Whether a ray that left a surface with normal `n` along `dir` (unit) and hit the next
+    /// one `t` away got into a gap narrower than the tracer resolves: its hit lies less than
+    /// [`Tracer::seal`] off the plane it left. A light path (or a camera path) ends there: such
+    /// a gap takes in light and gives none back (docs/math.md, "Gaps thinner than the scene
+    /// resolves").
+    pub fn seals(&self, n: Vec3, dir: Vec3, t: f32) -> bool {
+        t * n.dot(dir).abs() < self.seal
     }
 
     /// Closest hit along `dir` (unit) from `origin`, within `tmax`, as a receiver there sees
@@ -353,13 +397,14 @@ impl Tracer {
     /// backs of single-sided triangles let it through.
     pub fn occluded(&self, a: Vec3, na: Vec3, b: Vec3, nb: Vec3) -> bool {
         // In the BVH's coordinates (the frame's times k, exactly).
-        let (a, b, eps) = (a * self.k, b * self.k, self.eps * self.k);
+        let (ea, eb) = (self.epsilon_at(a) * self.k, self.epsilon_at(b) * self.k);
+        let (a, b) = (a * self.k, b * self.k);
         let d = b - a;
-        let a = a + na * eps * na.dot(d).signum();
-        let b = b - nb * eps * nb.dot(d).signum();
+        let a = a + na * ea * na.dot(d).signum();
+        let b = b - nb * eb * nb.dot(d).signum();
         let d = b - a;
         let len = d.length();
-        if len <= eps {
+        if len <= ea + eb {
             return false;
         }
         let ray = ray(a, d / len, len * (1.0 - 1e-4));
@@ -371,8 +416,9 @@ impl Tracer {
     }
 
     /// Offsets a surface point off its triangle, to the side `dir` leaves from.
+    /// By [`Tracer::epsilon_at`] `p`, along `n` (unit).
     pub fn offset(&self, p: Vec3, n: Vec3, dir: Vec3) -> Vec3 {
-        p + n * (self.eps * n.dot(dir).signum())
+        p + n * (self.epsilon_at(p) * n.dot(dir).signum())
     }
 }
 
@@ -418,6 +464,112 @@ mod tests {
             assert!(tr.occluded(o, Vec3::ZERO, far, Vec3::ZERO), "{plain}");
             assert!(tr.occluded(o, -axis, far, Vec3::ZERO), "{negated}");
         }
+    }
+
+    /// The Cornell box's frame with its triangles replaced by `tris`, every one double-sided
+    /// and of one white material, in no closed mesh.
+    fn frame_of(tris: Vec<[Vec3; 3]>) -> Frame {
+        let scene = builtin::load("cornell").unwrap().unwrap();
+        let mut f = scene.at(0.0);
+        let mut materials = (*f.materials).clone();
+        materials.truncate(1);
+        materials[0].double_sided = true;
+        f.materials = std::sync::Arc::new(materials);
+        f.normals = tris
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize())
+            .collect();
+        f.areas = tris
+            .iter()
+            .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
+            .collect();
+        f.tri_material = vec![0; tris.len()];
+        f.emitter_of_tri = vec![u32::MAX; tris.len()];
+        f.instances.clear();
+        f.attrs = None;
+        f.tris = tris;
+        f
+    }
+
+    /// How many rays leaving points of a triangle hit it or its coplanar neighbour, among
+    /// `n` a triangle for each shape, scale and place: the points come from rays that hit the
+    /// triangle (as a path's vertices do), and the rays leave them on either side, cosine
+    /// distributed and toward grazing (the cosine down to 1e-4).
+    fn self_hits(ulps: f32, n: usize) -> usize {
+        use crate::math::{cosine_hemisphere, rng};
+        use rand::Rng;
+        let mut r = rng(&[52, 0x0ff5]);
+        let mut count = 0;
+        for scale in [1e-3f32, 1.0, 7.3, 1e3] {
+            for shape in 0..24 {
+                // A quad split on its diagonal (two coplanar triangles), of random corners in
+                // the box [-scale, scale]^3: large or a sliver, near the middle or a corner.
+                let c = |r: &mut rand_pcg::Pcg32| {
+                    Vec3::new(r.random(), r.random(), r.random()) * 2.0 - 1.0
+                };
+                let (a, b, d) = (c(&mut r), c(&mut r), c(&mut r));
+                let (a, b, d) = match shape % 3 {
+                    0 => (a, b, d),
+                    1 => (a, b, a + (b - a) * 0.5 + (d - a) * 0.01),
+                    _ => (a * 0.05 + Vec3::splat(0.9), b * 0.05 + Vec3::splat(0.9), d),
+                };
+                let (a, b, d) = (a * scale, b * scale, d * scale);
+                let e = b + d - a;
+                let f = frame_of(vec![[a, b, d], [b, e, d]]);
+                let mut tr = Tracer::new(&f);
+                tr.size = 2.0 * scale;
+                let ng = f.normals[0];
+                for k in 0..n {
+                    let side = if k % 2 == 0 { ng } else { -ng };
+                    let bc =
+                        crate::math::triangle_barycentrics(glam::Vec2::new(r.random(), r.random()));
+                    let target = f.point(0, bc.x, bc.y);
+                    let from = target + side * (3.0 * scale) + (c(&mut r) * scale);
+                    let to = (target - from).normalize();
+                    let Some(h) = tr.intersect(from, to, f32::INFINITY) else {
+                        continue;
+                    };
+                    let p = f.point(h.tri as usize, h.b1, h.b2);
+                    let cos = if k % 4 < 2 {
+                        r.random::<f32>()
+                    } else {
+                        10f32.powf(-4.0 * r.random::<f32>())
+                    };
+                    let u = glam::Vec2::new(1.0 - cos * cos, r.random());
+                    let w = cosine_hemisphere(side, u);
+                    let o = p + side * epsilon(p, tr.size, ulps);
+                    if tr.intersect(o, w, f32::INFINITY).is_some() {
+                        count += 1;
+                    }
+                }
+            }
+        }
+        count
+    }
+
+    /// A ray that leaves a triangle's point (a path's vertex) by [`Tracer::offset`] hits
+    /// neither that triangle nor the one it shares an edge and a plane with, at any scale,
+    /// shape or angle: 0 of 192000 rays, half of them at cosines log-uniform from 1e-4 to 1. By
+    /// half the offset none does either; by a quarter, 8 do, so the sweep can tell.
+    #[test]
+    fn a_ray_never_hits_the_triangle_it_leaves() {
+        let n = 2000;
+        let quarter = self_hits(OFFSET_ULPS / 4.0, n);
+        println!(
+            "a quarter of the offset: {quarter} of {} rays hit their plane",
+            96 * n
+        );
+        assert!(quarter > 0, "the sweep finds no self-hit even at a quarter");
+        assert_eq!(self_hits(OFFSET_ULPS / 2.0, n), 0);
+        assert_eq!(self_hits(OFFSET_ULPS, n), 0);
+        // And Tracer::offset is that offset.
+        let f = frame_of(vec![[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        let tr = Tracer::new(&f);
+        let p = Vec3::new(0.3, 0.2, 0.0);
+        assert_eq!(
+            tr.offset(p, Vec3::Z, -Vec3::Z),
+            p - Vec3::Z * (OFFSET_ULPS * f32::EPSILON * tr.size())
+        );
     }
 
     #[test]

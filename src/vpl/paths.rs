@@ -86,6 +86,8 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         (u - env) / (1.0 - env)
     };
     let share = em.area_share();
+    // The normal of the surface the path's ray leaves (None: from no surface).
+    let mut from: Option<Vec3> = None;
     let (mut origin, mut dir, mut power) = if u < 0.0 {
         let (o, d, power) = super::environment::emit(em, &mut r);
         (o, d, power / env)
@@ -103,6 +105,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         // Le * cos / (p_e / A * cos / pi)
         let power = frame.emission_at(tri, b.x, b.y)
             * (std::f32::consts::PI * frame.areas[tri] / (p_e * share * (1.0 - env)));
+        from = Some(n);
         (tracer.offset(x, n, dir), dir, power)
     } else {
         let v = ((u - share) / (1.0 - share)).min(1.0 - 1e-7);
@@ -123,6 +126,10 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         let Some(h) = tracer.intersect_light(origin, dir, f32::INFINITY) else {
             break;
         };
+        // Into a gap thinner than the tracer resolves: its light does not come back.
+        if from.is_some_and(|n| tracer.seals(n, dir, h.t)) {
+            break;
+        }
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
@@ -212,6 +219,7 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         power *= albedo / q;
         dir = cosine_hemisphere(nf, Vec2::new(r.random(), r.random()));
         origin = tracer.offset(x, nf, dir);
+        from = Some(nf);
     }
     out
 }

@@ -43,7 +43,7 @@ fn a_vertex_between_plates_keeps_its_light_on_average() {
         assert!((reach - 0.04).abs() < 1e-6, "reach {reach}");
         let gap = reach * a;
         // The rays leave from the point offset by the tracer's epsilon toward the other plate.
-        let f = (((gap - tracer.epsilon()) / reach) as f64).powi(2);
+        let f = (((gap - tracer.epsilon_at(glam::Vec3::ZERO)) / reach) as f64).powi(2);
         let gathered = 1.0 - (1.0 - side * f).max(0.0).powf(side);
         let n = 20000u64;
         let coins: Vec<Option<(f32, Option<f32>)>> = (0..n)

@@ -307,12 +307,12 @@ fn kept_mh_weights_hold_still_and_the_rate_follows_the_scene() {
     let scene = builtin::load("cornell").unwrap().unwrap();
     let frame = scene.at(0.0);
     let tracer = Tracer::new(&frame);
-    let p = |kind| {
+    let p = |kind, seed| {
         knobbed(
             SamplerParams {
                 slots: 64,
                 candidates: 256,
-                ..params(kind, 21)
+                ..params(kind, seed)
             },
             |k| {
                 k.mh_rate = 0.05;
@@ -320,50 +320,55 @@ fn kept_mh_weights_hold_still_and_the_rate_follows_the_scene() {
             },
         )
     };
-    // Mean |log ratio| of consecutive frames' b for cdf, and of kept VPLs' weights for mh.
-    let mut cdf = Sampler::new(p(SamplerKind::Cdf));
-    let bs: Vec<f64> = (0..40)
-        .map(|f| cdf.select(&frame, &tracer, f).b.unwrap() as f64)
-        .collect();
-    let cdf_jump = bs.windows(2).map(|w| (w[1] / w[0]).ln().abs()).sum::<f64>() / 39.0;
-    let mut mh = Sampler::new(p(SamplerKind::Mh));
-    let mut last = mh.select(&frame, &tracer, 0);
-    let (mut jump, mut kept) = (0.0f64, 0usize);
-    for f in 1..40 {
-        let s = mh.select(&frame, &tracer, f);
-        assert_eq!(
-            s.renewal_rate,
-            Some(0.05),
-            "frame {f}: nothing moved, the base rate"
-        );
-        for ((v, w), (v0, w0)) in s
-            .vpls
-            .iter()
-            .zip(&s.shaded)
-            .zip(last.vpls.iter().zip(&last.shaded))
-        {
-            if (v.path, v.depth) == (v0.path, v0.depth) {
-                jump += (luminance(w.flux) as f64 / luminance(w0.flux) as f64)
-                    .ln()
-                    .abs();
-                kept += 1;
+    // Mean |log ratio| of consecutive frames' b for cdf, and of kept VPLs' weights for mh, over
+    // four seeds (one seed's ratio of the two lies anywhere in 0.26-0.42: seeds 21-28).
+    let (mut cdf_jump, mut mh_jump) = (0.0f64, 0.0f64);
+    for seed in 21..25 {
+        let mut cdf = Sampler::new(p(SamplerKind::Cdf, seed));
+        let bs: Vec<f64> = (0..40)
+            .map(|f| cdf.select(&frame, &tracer, f).b.unwrap() as f64)
+            .collect();
+        cdf_jump += bs.windows(2).map(|w| (w[1] / w[0]).ln().abs()).sum::<f64>() / 39.0 / 4.0;
+        let mut mh = Sampler::new(p(SamplerKind::Mh, seed));
+        let mut last = mh.select(&frame, &tracer, 0);
+        let (mut jump, mut kept) = (0.0f64, 0usize);
+        for f in 1..40 {
+            let s = mh.select(&frame, &tracer, f);
+            assert_eq!(
+                s.renewal_rate,
+                Some(0.05),
+                "frame {f}: nothing moved, the base rate"
+            );
+            for ((v, w), (v0, w0)) in s
+                .vpls
+                .iter()
+                .zip(&s.shaded)
+                .zip(last.vpls.iter().zip(&last.shaded))
+            {
+                if (v.path, v.depth) == (v0.path, v0.depth) {
+                    jump += (luminance(w.flux) as f64 / luminance(w0.flux) as f64)
+                        .ln()
+                        .abs();
+                    kept += 1;
+                }
             }
+            last = s;
         }
-        last = s;
+        println!("seed {seed}: {kept} kept");
+        mh_jump += jump / kept as f64 / 4.0;
     }
-    let mh_jump = jump / kept as f64;
-    println!("mean |log change| per frame: cdf's b {cdf_jump:.5}, kept mh weights {mh_jump:.5} ({kept} kept)");
-    // Measured: cdf 0.0592, mh 0.0210 (0.36x; a renewal of 5% of the pool a frame moves b by
+    println!("mean |log change| per frame: cdf's b {cdf_jump:.5}, kept mh weights {mh_jump:.5}");
+    // Measured: cdf 0.0781, mh 0.0257 (0.33x; a renewal of 5% of the pool a frame moves b by
     // about sqrt(0.05) = 0.22x, and M / P moves too). Drawn from fresh candidates, b moved as
     // much as cdf's (1x).
     assert!(cdf_jump > 0.005, "cdf's b barely moved: {cdf_jump}");
     assert!(
-        mh_jump < 0.4 * cdf_jump,
+        mh_jump < 0.5 * cdf_jump,
         "kept weights moved {mh_jump} against cdf's b {cdf_jump}"
     );
     // A moving light moves the target: the rate rises above the base.
     let scene = builtin::load("cornell-light").unwrap().unwrap();
-    let mut mh = Sampler::new(p(SamplerKind::Mh));
+    let mut mh = Sampler::new(p(SamplerKind::Mh, 21));
     let mut rates = Vec::new();
     for f in 0..6 {
         let frame = scene.at(f as f32 / 24.0);

@@ -241,9 +241,10 @@ use irad::reference::RR_CAP_DEPTH;
 /// far too noisy to judge by (two of 8192 spp differ by relMSE 10): the judge is the mean of
 /// 16 (seeds 1-16, 4 s each here), whose image mean is within 1.7% of the true one and whose
 /// 4 x 4 blocks within relMSE about 0.023, and the 1 mm rows are compared on those blocks
-/// ([`blocks`]; docs/math.md, "Out of a 1 mm gap"). From 0.1 mm down no path gets in (the
-/// tracer's offset is wider than the gap), so they keep the default (docs/math.md, "What the
-/// reference can show of a gap").
+/// ([`blocks`]; docs/math.md, "Out of a 1 mm gap"). From 0.1 mm down no path gets in (a gap
+/// thinner than 1e-4 of the scene, 0.2 mm here, ends the paths that enter it:
+/// `Tracer::seals`), so they keep the default (docs/math.md, "What the reference can show of a
+/// gap", "Gaps thinner than the scene resolves").
 fn judge(gap: f32, spp: u32) -> (u32, u32, u64) {
     if gap >= 0.01 {
         (256, spp.max(65536), 1)
@@ -425,24 +426,26 @@ fn the_gap_sweep_against_the_reference() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    // Measured (docs/math.md, "Into a 1 mm gap, seen in proportion"): the largest relMSE 0.049
-    // and 0.047 at 1 cm (+2.2%, +3.2%), 0.031 at 0.1 mm and less, the mean bias -2.1% to +2.2%;
-    // at 1 mm, on 4 x 4 blocks against the true image, 0.032 and 0.031, the mean -0.5% and
-    // -2.3% (seeds -5.8% to +4.2%; over 16 seeds -4.4% and -3.3%, ONE_MM). With the walkers'
-    // rounds each a hypercube of its own (stop 50), -6.4% and -5.2%; with cosine lobes on the
-    // way out, and none from the vertices deep in the gap whose coin was skipped (stop 49),
-    // -8.1% and -6.5%; before the compensation walked the gap (stop 48), 0.052 and 0.050 at
-    // 1 mm, 27-29% under; before light paths followed the gap's light out (1024 bounces),
-    // 0.060-0.076 on blocks.
+    // Measured (docs/math.md, "Gaps thinner than the scene resolves"): the largest relMSE 0.042
+    // and 0.043 at 1 cm (+0.7%, +1.3%), 0.029 at 0.1 mm and less, the mean bias +2.0% to +2.4%;
+    // at 1 mm, on 4 x 4 blocks against the true image, 0.029 and 0.030, the mean -5.5% and
+    // -4.9% (seeds -10.7% to -0.9%; over 16 seeds -2.2% +- 1.2% and -2.2% +- 1.6%, ONE_MM).
+    // At the old ray offset, against its judge (stop 51), -0.5% and -2.3%, and over 16 seeds
+    // -4.4% and -3.3%; with the walkers' rounds each a hypercube of its own (stop 50), -6.4%
+    // and -5.2%; with cosine lobes on the way out, and none from the vertices deep in the gap
+    // whose coin was skipped (stop 49), -8.1% and -6.5%; before the compensation walked the gap
+    // (stop 48), 0.052 and 0.050 at 1 mm, 27-29% under; before light paths followed the gap's
+    // light out (1024 bounces), 0.060-0.076 on blocks.
     assert_rows(&rows, [0.05, 0.04, 0.035]);
 }
 
-/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Into a 1 mm
-/// gap, seen in proportion"): the largest relMSE 0.035 and 0.048 at 1 cm (0.037 and 0.040 with
-/// cosine lobes on the way out), 0.023 and less below, the mean bias -3.1% to +2.2%; at 1 mm,
-/// on blocks against the true image, 0.032 and 0.029, the mean -0.5% and -1.6% (seeds -10.1%
-/// to +4.1%; over 16 seeds -4.5% and -3.3%, ONE_MM). Stop 50: -6.5% and -4.6%; stop 49: -8.7%
-/// and -7.0%; before the compensation walked the gap, 0.049 and 0.050, 27-29% under.
+/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "Gaps thinner
+/// than the scene resolves"): the largest relMSE 0.044 and 0.035 at 1 cm, 0.022 and less below
+/// 1 mm, the mean bias -0.8% to +1.1%; at 1 mm, on blocks against the true image, 0.023 and
+/// 0.026, the mean -2.8% and -3.7% (seeds -5.2% to +0.1%; over 16 seeds -1.8% and -2.2%,
+/// [`the_default_samplers_one_mm_rows_over_16_seeds`]). Stop 51, at the old ray offset
+/// against its judge: -0.5% and -1.6%; stop 50: -6.5% and -4.6%; stop 49: -8.7% and -7.0%;
+/// before the compensation walked the gap, 0.049 and 0.050, 27-29% under.
 #[test]
 fn the_gap_sweep_with_the_default_sampler() {
     let rows = sweep(
@@ -453,17 +456,16 @@ fn the_gap_sweep_with_the_default_sampler() {
     assert_rows(&rows, [0.05, 0.04, 0.03]);
 }
 
-/// The 1 mm rows' mean bias, as issue 23 asks of every row: within 5% of the true image. Over
-/// seeds 1-4 they are -0.5% to -2.3% (a seed alone -10.1% to +4.2%), but over 16 seeds
-/// (`the_one_mm_rows_over_16_seeds`) -4.5% to -3.3%, each with a standard error of 1.0-1.2%,
-/// and against the mean of 32 true images rather than the judge's 16 (1.7% brighter) the
-/// double-sided `mh` row is 5.9% under over 32 seeds (docs/math.md, "Into a 1 mm gap, seen in
-/// proportion"): seeds 1-4 lie on the lucky side of a row that is 4-6% under. The judge itself
-/// carries too much of the gap's light (the ray offset, 1e-4 of the scene's size, is a fifth of
-/// the gap; same section): with a tenth of it in both, the double-sided `mh` row is -0.3% +-
-/// 1.8% over 16 seeds. Before the walkers' rounds were slices of one hypercube (stop 50) seeds
-/// 1-4 were 4.6-6.5% under and the test allowed 8%; stop 49: 6.5-8.7%; stop 48: 27-29%.
-const ONE_MM: f64 = 0.05;
+/// The 1 mm rows' mean bias over seeds 1-4: within 8% of the true image. Issue 23 asks 5% of
+/// every row, but at 1 mm a frame's mean swings by about 5% from seed to seed (the camera's
+/// view into the gap's mouth), so four seeds' mean has a standard error of about 2.5%:
+/// [`the_default_samplers_one_mm_rows_over_16_seeds`] holds the bias to 5% over 16 seeds. At
+/// stop 52 (a ray offset of 1.5e-5 of the scene's size, in the judge too): seeds 1-4 -5.5% to
+/// +0.2%, and over 16 seeds -1.8% to -2.2% with standard errors of 0.9-1.6% (docs/math.md, "Gaps
+/// thinner than the scene resolves"). At stop 51, at the old offset of 1e-4 (a fifth of the
+/// gap), whose judge carried 8% too much of the gap's light, this bound was 5%; stop 50 8%;
+/// stop 49: seeds 1-4 6.5-8.7% under; stop 48: 27-29%.
+const ONE_MM: f64 = 0.08;
 
 /// Every row's largest relMSE within its bound (`[1 cm, 1 mm, the gaps below]`) and its mean
 /// bias within 5% ([`ONE_MM`] at 1 mm).
@@ -498,12 +500,13 @@ fn the_gap_sweep_without_compensation() {
         // lamp's inside starts no light path. At 1 cm the VPLs' mean is far below the judge
         // (-24.2% both sides, relMSE 0.051: the camera sees into the gap's mouth, whose inside
         // the clamped gather cannot light, and what a crevice's VPLs light nearby is the
-        // compensation's). At 1 cm now 0.051, -23.9%. At 1 mm, on blocks against the true image,
-        // 0.055, -33.2% (the mouth darker still than with the compensation); below, at most
-        // 0.029 and -3.9%. Each at most 5% over.
+        // compensation's). At 1 cm now 0.047, -23.9%. At 1 mm, on blocks against the true image,
+        // 0.051, -22.7% (the mouth darker still than with the compensation; stop 51, against the
+        // judge at the old ray offset, 8% brighter: 0.055, -33.2%); below, at most 0.028 and
+        // +0.2%. Each at most about 10% over.
         let (mse, under) = match gap {
             g if g >= 0.01 => (0.06, 0.27),
-            g if g >= 0.001 => (0.065, 0.36),
+            g if g >= 0.001 => (0.056, 0.25),
             _ => (0.035, 0.05),
         };
         assert!(
@@ -769,23 +772,22 @@ fn every_lamp_of_the_sweep_is_compensated() {
     assert_eq!((s, auto(s)), (0.0, 0));
 }
 
-/// The 1 mm rows over 16 seeds against their judge, the true image ([`judge`], on blocks; a
-/// measurement: `--ignored`, about 5 minutes): the mean bias with its standard error, so that a
-/// bias can be told from the seed-to-seed spread of the gap's mouth (docs/math.md, "Into a 1 mm
-/// gap, seen in proportion": -4.5% to -3.3%, standard errors 1.0-1.2%, relMSE at most 0.036).
-#[test]
-#[ignore]
-fn the_one_mm_rows_over_16_seeds() {
-    use irad::vpl::sampler::SamplerKind;
+/// The 1 mm rows of `samplers` over 16 seeds against their judge, the true image ([`judge`], on
+/// blocks), printed as a table: (double-sided, sampler, mean bias, its standard error, relMSE
+/// median and largest) for each.
+fn one_mm_rows_over_16_seeds(
+    samplers: &[irad::vpl::sampler::SamplerKind],
+) -> Vec<(bool, irad::vpl::sampler::SamplerKind, f64, f64, f64, f64)> {
     let seeds: Vec<u64> = (1..=16).collect();
     println!(
         "| sides | sampler | mean bias | standard error | relMSE (median, largest) | each seed |"
     );
     println!("| --- | --- | --- | --- | --- | --- |");
+    let mut rows = Vec::new();
     for double in [true, false] {
         let scene = common::quads::load(&cornell_with_gap(0.001, double));
         let r = judge_frame(&scene, (0.001, double), 32, 1024);
-        for sampler in [SamplerKind::Uniform, SamplerKind::Mh] {
+        for &sampler in samplers {
             let errors: Vec<_> = seeds
                 .iter()
                 .map(|&seed| {
@@ -801,22 +803,64 @@ fn the_one_mm_rows_over_16_seeds() {
                 .sum::<f64>()
                 / (n - 1.0);
             let mut mse: Vec<f64> = errors.iter().map(|e| e.rel_mse).collect();
-            mse.sort_by(f64::total_cmp);
             let each: Vec<String> = errors
                 .iter()
-                .map(|e| format!("{:+.0}", 100.0 * e.rel_bias))
+                .map(|e| format!("{:+.0} ({:.3})", 100.0 * e.rel_bias, e.rel_mse))
                 .collect();
+            mse.sort_by(f64::total_cmp);
+            let row = (
+                double,
+                sampler,
+                mean,
+                (var / n).sqrt(),
+                mse[mse.len() / 2],
+                mse[mse.len() - 1],
+            );
             println!(
                 "| {} | {sampler:?} | {:+.1}% | {:.1}% | {:.4}, {:.4} | {} |",
                 if double { "double" } else { "single" },
-                100.0 * mean,
-                100.0 * (var / n).sqrt(),
-                mse[mse.len() / 2],
-                mse[mse.len() - 1],
+                100.0 * row.2,
+                100.0 * row.3,
+                row.4,
+                row.5,
                 each.join(" ")
             );
+            rows.push(row);
         }
     }
+    rows
+}
+
+/// Issue 23 item 1 at 1 mm, where a frame's mean swings from seed to seed by about 5% (the
+/// camera's view into the gap's mouth, a hundredth of a pixel high, carries a third of the
+/// image): the default sampler's rows, both sides, over 16 seeds against the true image,
+/// their mean bias within 5% and the median relMSE within 0.025 (measured at stop 52: -1.8%
+/// +- 0.9% and -2.2% +- 1.3%, medians 0.017 and 0.016; the largest, 0.023 and 0.058, are
+/// single seeds of a heavy tail). Seeds 1-4 alone have a standard error of about 2.5%: the
+/// sweep's 1 mm rows hold their mean to 8% ([`ONE_MM`]). About 2 minutes here.
+#[test]
+fn the_default_samplers_one_mm_rows_over_16_seeds() {
+    for (double, _, mean, se, median, _) in
+        one_mm_rows_over_16_seeds(&[irad::vpl::sampler::SamplerKind::Mh])
+    {
+        assert!(
+            mean.abs() <= 0.05 && median <= 0.025,
+            "double-sided {double}: mean bias {:+.1}% +- {:.1}%, relMSE median {median:.4}",
+            100.0 * mean,
+            100.0 * se
+        );
+    }
+}
+
+/// Both samplers' 1 mm rows over 16 seeds ([`one_mm_rows_over_16_seeds`]; a measurement:
+/// `--ignored`, about 5 minutes): docs/math.md, "Gaps thinner than the scene resolves" (stop 52:
+/// -1.8% to -2.2%, standard errors 0.9-1.6%, relMSE medians 0.016-0.020; stop 51, at the old
+/// ray offset and against its judge: -4.5% to -3.3%).
+#[test]
+#[ignore]
+fn the_one_mm_rows_over_16_seeds() {
+    use irad::vpl::sampler::SamplerKind;
+    one_mm_rows_over_16_seeds(&[SamplerKind::Uniform, SamplerKind::Mh]);
 }
 
 /// The 1 cm and 1 mm rows against references that carry the gap's light (a measurement:
@@ -1217,8 +1261,10 @@ fn the_compensation_carries_the_light_inside_a_one_mm_gap() {
 /// sees into the gap over about a hundredth of a pixel's height, which a round of 64 paths can
 /// miss, and a round that finds no light there asks for few more. The pixels of the lamp's
 /// front edge (row 3, columns 13-18, seeds 1-4, both sides) each take at least half of
-/// [`irad::compensation::MAX_ROUNDS`] (measured: 11-16). Without the finer camera rays that
-/// look for the gap in a pixel across an edge, seed 4's first pixel took 5.
+/// [`irad::compensation::MAX_ROUNDS`] (measured: 8-16; a walker takes at least half). Without
+/// the finer camera rays that look for the gap in a pixel across an edge, seed 4's first pixel
+/// took 5; without that floor (stop 52), seed 3's fourth, a walker whose first round's
+/// variance asked for 6.
 #[test]
 fn pixels_that_see_into_a_one_mm_gap_take_every_round() {
     use irad::compensation::{compensate_in_rounds, Light, MAX_ROUNDS};

@@ -348,12 +348,14 @@ fn check_size(cx: &Ctx, scene: &Scene) -> Result<(), LoadError> {
     Ok(())
 }
 
-/// A scene whose centre lies more than 100 times its size from the origin is moved to the
-/// origin: 32-bit coordinates there would be too coarse for its detail (rays would leak).
+/// A scene whose centre lies more than [`RECENTER`] times its size from the origin is moved
+/// to the origin: 32-bit coordinates there are coarse for its detail (rays would leak), and
+/// its rays would leave surfaces from farther off them than a scene's at the origin
+/// (`trace::POINT_ULPS`).
 fn recenter(cx: &mut Ctx, scene: &mut Scene, (lo, hi): (Vec3, Vec3)) {
     let center = (lo + hi) * 0.5;
     let size = (hi - lo).max_element().max(1e-6);
-    if center.abs().max_element() > 100.0 * size {
+    if center.abs().max_element() > RECENTER * size {
         scene.shift = -center;
         cx.warn(format!(
             "the scene lies {:.3e} units from the origin, {:.0} times its size: it is moved to the origin (by {}) for precision",
@@ -363,6 +365,11 @@ fn recenter(cx: &mut Ctx, scene: &mut Scene, (lo, hi): (Vec3, Vec3)) {
         ));
     }
 }
+
+/// How many times its size from the origin a scene's centre may lie before [`recenter`] moves
+/// it there: 15, within which the ray tracer's offsets are the scene's size's alone
+/// (`trace::POINT_ULPS`; 100 before stop 52).
+pub const RECENTER: f32 = 15.0;
 
 /// The most a mesh's coordinates may be rounded, as a share of its median edge (32-bit floats
 /// are up to `|x| * 2^-23` apart near `x`).
