@@ -92,11 +92,6 @@ fn barycentrics(t: &Triangle, p: Vec3A) -> (f32, f32) {
     (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0))
 }
 
-/// The power of two `k >= 1` that brings a scene of size `size` (its bounding box's largest
-/// side) to at least 2 (1 for most scenes). obvhs skips BVH nodes whose exit distance is under
-/// an absolute 1e-4 (`cwbvh::node::EPSILON`): in a millimetre-sized scene that is 5% of
-/// it, and a 1e-3-scaled Cornell box rendered 1.1% darker in the reference. Multiplying by a
-/// power of two is exact, so a scene modelled at any scale traces as its unit-sized twin does.
 /// How many units in the last place of the scene's size a ray leaving a surface starts off
 /// it ([`Tracer::epsilon_at`]): 128, 1.5e-5 of the size. Of the size, not of the point's own
 /// coordinates: a ray's distance to a triangle's plane, as the intersection test computes it,
@@ -124,6 +119,11 @@ fn epsilon(p: Vec3, size: f32, ulps: f32) -> f32 {
 /// ([`Tracer::seals`]).
 pub const SEAL: f32 = 1e-4;
 
+/// The power of two `k >= 1` that brings a scene of size `size` (its bounding box's largest
+/// side) to at least 2 (1 for most scenes). obvhs skips BVH nodes whose exit distance is under
+/// an absolute 1e-4 (`cwbvh::node::EPSILON`): in a millimetre-sized scene that is 5% of
+/// it, and a 1e-3-scaled Cornell box rendered 1.1% darker in the reference. Multiplying by a
+/// power of two is exact, so a scene modelled at any scale traces as its unit-sized twin does.
 fn scale_for(size: f32) -> f32 {
     if !(size > 0.0 && size < 2.0) {
         return 1.0;
@@ -491,10 +491,11 @@ mod tests {
         f
     }
 
-    /// How many rays leaving points of a triangle hit it or its coplanar neighbour, among
-    /// `n` a triangle for each shape, scale and place: the points come from rays that hit the
-    /// triangle (as a path's vertices do), and the rays leave them on either side, cosine
-    /// distributed and toward grazing (the cosine down to 1e-4).
+    /// How many rays leaving points of a triangle, offset by `ulps` units of the scene's size,
+    /// hit it or its coplanar neighbour: `n` rays for each of 24 quads at each of 4 scales. The
+    /// points come from rays that hit the triangle (as a path's vertices do), and the rays
+    /// leave them on either side, cosine distributed or toward grazing (the cosine down to
+    /// 1e-4).
     fn self_hits(ulps: f32, n: usize) -> usize {
         use crate::math::{cosine_hemisphere, rng};
         use rand::Rng;
@@ -517,6 +518,7 @@ mod tests {
                 let e = b + d - a;
                 let f = frame_of(vec![[a, b, d], [b, e, d]]);
                 let mut tr = Tracer::new(&f);
+                // The scene is the box, whatever the quad's own extent.
                 tr.size = 2.0 * scale;
                 let ng = f.normals[0];
                 for k in 0..n {
