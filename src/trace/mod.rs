@@ -120,17 +120,24 @@ fn epsilon(p: Vec3, size: f32, ulps: f32) -> f32 {
 pub const SEAL: f32 = 1e-4;
 
 /// The power of two `k >= 1` that brings a scene of size `size` (its bounding box's largest
-/// side) to at least 2 (1 for most scenes). obvhs skips BVH nodes whose exit distance is under
-/// an absolute 1e-4 (`cwbvh::node::EPSILON`): in a millimetre-sized scene that is 5% of
-/// it, and a 1e-3-scaled Cornell box rendered 1.1% darker in the reference. Multiplying by a
-/// power of two is exact, so a scene modelled at any scale traces as its unit-sized twin does.
+/// side) to at least [`BVH_SIZE`]. obvhs skips BVH nodes whose exit distance is under an
+/// absolute 1e-4 (`cwbvh::node::EPSILON`): in a millimetre-sized scene that was 5% of it (a
+/// 1e-3-scaled Cornell box rendered 1.1% darker in the reference), and with scenes brought
+/// only to a size of 2 a ray could still pass through a surface less than 1e-4 of the BVH's
+/// units ahead of it in a flat node, 5e-5 of the scene: a gap's far side, a concave corner
+/// (`a_gap_thinner_than_the_seal_seals_at_any_scale_and_angle`). Multiplying by a power of
+/// two is exact, so a scene modelled at any scale traces as its unit-sized twin does.
 fn scale_for(size: f32) -> f32 {
-    if !(size > 0.0 && size < 2.0) {
+    if !(size > 0.0 && size < BVH_SIZE) {
         return 1.0;
     }
-    2f32.powi((2.0 / size).log2().ceil() as i32)
+    2f32.powi((BVH_SIZE / size).log2().ceil() as i32)
         .min(2f32.powi(100))
 }
+
+/// The size the BVH's coordinates bring a scene to at least ([`scale_for`]): 2^14, so that
+/// obvhs's absolute 1e-4 is 6e-9 of it, far under the rays' offset (1.5e-5 of it).
+const BVH_SIZE: f32 = 16384.0;
 
 fn to_obvhs(frame: &Frame, k: f32) -> Vec<Triangle> {
     frame.tris.iter().map(|t| triangle(t, k)).collect()
@@ -572,6 +579,58 @@ mod tests {
             tr.offset(p, Vec3::Z, -Vec3::Z),
             p - Vec3::Z * (OFFSET_ULPS * f32::EPSILON * tr.size())
         );
+    }
+
+    /// Two facing plates `gap` apart in a scene `scale` across: a ray that leaves the lower
+    /// one is sealed when the gap is under 1e-4 of the scene's size ([`SEAL`]) and not when
+    /// it is over, whatever the scale and the ray's angle; and it hits the upper plate either
+    /// way (the offset, 1.5e-5 of the size, stays under the gap).
+    #[test]
+    fn a_gap_thinner_than_the_seal_seals_at_any_scale_and_angle() {
+        use crate::math::{cosine_hemisphere, rng};
+        use rand::Rng;
+        let mut r = rng(&[52, 0x5ea1]);
+        for scale in [1e-3f32, 1.0, 1e3] {
+            for (share, sealed) in [(0.2f32, true), (0.8, true), (1.25, false), (5.0, false)] {
+                let gap = share * SEAL * 2.0 * scale;
+                let (lo, hi) = (-scale, scale);
+                let plate = |y: f32, up: bool| {
+                    let (a, b, c, d) = (
+                        Vec3::new(lo, y, lo),
+                        Vec3::new(hi, y, lo),
+                        Vec3::new(hi, y, hi),
+                        Vec3::new(lo, y, hi),
+                    );
+                    if up {
+                        [[a, d, c], [a, c, b]]
+                    } else {
+                        [[a, b, c], [a, c, d]]
+                    }
+                };
+                let mut tris = plate(0.0, true).to_vec();
+                tris.extend(plate(gap, false));
+                let f = frame_of(tris);
+                let tr = Tracer::new(&f);
+                assert!((tr.size() - 2.0 * scale).abs() <= 1e-6 * scale);
+                for _ in 0..200 {
+                    let x =
+                        Vec3::new(r.random::<f32>() - 0.5, 0.0, r.random::<f32>() - 0.5) * scale;
+                    let w = cosine_hemisphere(
+                        Vec3::Y,
+                        glam::Vec2::new(0.9 * r.random::<f32>(), r.random()),
+                    );
+                    let h = tr
+                        .intersect_light(tr.offset(x, Vec3::Y, w), w, f32::INFINITY)
+                        .expect("the upper plate");
+                    assert!(h.tri >= 2, "scale {scale}, gap {gap}: hit its own plate");
+                    assert_eq!(
+                        tr.seals(Vec3::Y, w, h.t),
+                        sealed,
+                        "scale {scale}, gap {share} seals, along {w}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

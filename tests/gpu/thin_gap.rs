@@ -428,7 +428,7 @@ fn the_gap_sweep_against_the_reference() {
     );
     // Measured (docs/math.md, "Gaps thinner than the scene resolves"): the largest relMSE 0.042
     // and 0.043 at 1 cm (+0.7%, +1.3%), 0.029 at 0.1 mm and less, the mean bias +2.0% to +2.4%;
-    // at 1 mm, on 4 x 4 blocks against the true image, 0.029 and 0.030, the mean -5.5% and
+    // at 1 mm, on 4 x 4 blocks against the true image, 0.028 and 0.030, the mean -5.5% and
     // -4.9% (seeds -10.7% to -0.9%; over 16 seeds -2.2% +- 1.2% and -2.2% +- 1.6%, ONE_MM).
     // At the old ray offset, against its judge (stop 51), -0.5% and -2.3%, and over 16 seeds
     // -4.4% and -3.3%; with the walkers' rounds each a hypercube of its own (stop 50), -6.4%
