@@ -166,10 +166,10 @@ pub fn compensate(
 /// such a pixel: the few of its paths that go deep into the gap carry most of its light. A
 /// pixel that sees into a crevice (a walker: its first round saw a sealed point, its finer rays
 /// found one, or its walks used up its share of [`PILOT_WALKS`]) traces all its rounds again
-/// (at least half of `max_rounds`),
-/// its first one not kept, with its share of [`WALKS`], from the slices of one Latin hypercube
-/// over all of them (`Points`): the few of its camera points that see into the crevice are as
-/// many as the sliver it sees through is high, whatever the random numbers.
+/// (at least half of `max_rounds`), its first one not kept, with its share of [`WALKS`], from
+/// the slices of one Latin hypercube over all of them (`Points`): the few of its camera points
+/// that see into the crevice are as many as the sliver it sees through is high, whatever the
+/// random numbers.
 /// (The number of rounds depends on the first round's samples, which the mean keeps, so where
 /// it varies from seed to seed the estimate is biased, as any adaptive sampling that keeps its
 /// pilot; docs/math.md, "Rounds of compensation paths", measures it.)

@@ -31,9 +31,6 @@ pub struct Tracer {
     pub builds: usize,
     /// Seconds spent in the last build (0 if the last update kept the BVH).
     pub last_build_s: f64,
-    /// The gap narrower than which two surfaces are one ([`Tracer::seals`]): 1e-4 of the
-    /// scene's size.
-    seal: f32,
     /// The scene's size: its bounding box's largest side.
     size: f32,
     /// The power of two the BVH's coordinates are the frame's times ([`scale_for`]).
@@ -182,7 +179,6 @@ impl Tracer {
             tris,
             builds: 1,
             last_build_s: start.elapsed().as_secs_f64(),
-            seal: SEAL * if size > 0.0 { size } else { 1e-3 },
             size: if size > 0.0 { size } else { 1e-3 },
             k,
             cutouts: frame.has_cutouts().then(|| Box::new(frame.clone())),
@@ -311,18 +307,13 @@ impl Tracer {
         epsilon(p, self.size, OFFSET_ULPS)
     }
 
-    /// The gap narrower than which two facing surfaces are one ([`Tracer::seals`]).
-    pub fn seal(&self) -> f32 {
-        self.seal
-    }
-
     /// Whether a ray that left a surface with normal `n` along `dir` (unit) and hit the next
     /// one `t` away got into a gap narrower than the tracer resolves: its hit lies less than
-    /// [`Tracer::seal`] off the plane it left. A light path (or a camera path) ends there: such
+    /// [`SEAL`] of the scene's size off the plane it left. A light path (or a camera path) ends there: such
     /// a gap takes in light and gives none back (docs/math.md, "Gaps thinner than the scene
     /// resolves").
     pub fn seals(&self, n: Vec3, dir: Vec3, t: f32) -> bool {
-        t * n.dot(dir).abs() < self.seal
+        t * n.dot(dir).abs() < SEAL * self.size
     }
 
     /// Closest hit along `dir` (unit) from `origin`, within `tmax`, as a receiver there sees
