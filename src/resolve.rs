@@ -9,7 +9,7 @@
 use crate::config::Render;
 use crate::gpu::RendererConfig;
 use crate::scene::{Frame, Scene};
-use crate::trace::Tracer;
+use crate::trace::{Next, Tracer};
 use crate::vpl::sampler::SamplerParams;
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -420,14 +420,12 @@ pub fn free_path(frame: &Frame, tracer: &Tracer) -> Option<f32> {
                 continue;
             }
             let dir = crate::math::cosine_hemisphere(side, u);
-            let hit = tracer.intersect(tracer.offset(x, n, dir), dir, f32::INFINITY);
-            // Not inside closed meshes, where no light the frame shows goes, nor into a gap
-            // thinner than the tracer resolves (`Tracer::seals`).
-            if let Some(h) = hit.filter(|h| {
-                !tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], dir)
-                    && !tracer.seals(n, dir, h.t)
-            }) {
-                d.push(h.t);
+            // Not into a gap thinner than the tracer resolves, nor inside closed meshes,
+            // where no light the frame shows goes.
+            if let Next::Hit(h) = tracer.follow(&tracer.leave(x, n, dir), f32::INFINITY) {
+                if !tracer.struck_inside_solid(h.tri, frame.normals[h.tri as usize], dir) {
+                    d.push(h.t);
+                }
             }
         }
     }

@@ -35,7 +35,7 @@
 use crate::math::{cosine_hemisphere, luminance, rng};
 use crate::reference::twin::SurfacePoint;
 use crate::scene::{EmitterSample, Frame, SampleKind};
-use crate::trace::Tracer;
+use crate::trace::{Next, Tracer};
 use crate::vpl::ShadedVpl;
 use glam::{Vec2, Vec3};
 use rand::Rng;
@@ -542,13 +542,11 @@ fn walk(
     while bounce < bounces.min(MAX_BOUNCES) && deep < SEALED_BOUNCES {
         let w = cosine_hemisphere(x.n, u);
         let reaches = if sealed { f32::INFINITY } else { clamp };
-        let Some(h) = tracer.intersect(tracer.offset(x.x, x.n, w), w, reaches) else {
-            break;
+        let h = match tracer.follow(&tracer.leave(x.x, x.n, w), reaches) {
+            Next::Hit(h) => h,
+            // Into a gap thinner than the tracer resolves: its light does not come back.
+            Next::Sealed | Next::Miss => break,
         };
-        // Into a gap thinner than the tracer resolves: its light does not come back.
-        if tracer.seals(x.n, w, h.t) {
-            break;
-        }
         if !sealed {
             let weight = 1.0 - (h.t / clamp).powi(2);
             if weight <= 0.0 {

@@ -12,7 +12,7 @@ use super::mesh::Mesh;
 use super::{ambient, element_materials, punctual_direct, RadiositySettings, Solution, Stats};
 use crate::math::{cosine_hemisphere, luminance, rng, triangle_barycentrics};
 use crate::scene::Frame;
-use crate::trace::Tracer;
+use crate::trace::{Next, Tracer};
 use glam::{Vec2, Vec3};
 use rand::Rng;
 use rayon::prelude::*;
@@ -116,11 +116,11 @@ pub fn solve(
                         let x = a0 * (1.0 - b.x - b.y) + a1 * b.x + a2 * b.y;
                         let nrm = mesh.elems[i].normal;
                         let d = cosine_hemisphere(nrm, Vec2::new(r.random(), r.random()));
-                        let o = tracer.offset(x, nrm, d);
-                        if let Some(h) = tracer.intersect(o, d, f32::INFINITY) {
+                        // Not into a gap thinner than the tracer resolves.
+                        let ray = tracer.leave(x, nrm, d);
+                        if let Next::Hit(h) = tracer.follow(&ray, f32::INFINITY) {
                             let j = h.tri as usize;
-                            // Not into a gap thinner than the tracer resolves.
-                            if mesh.elems[j].normal.dot(d) < 0.0 && !tracer.seals(nrm, d, h.t) {
+                            if mesh.elems[j].normal.dot(d) < 0.0 {
                                 got.push((j as u32, w, we));
                             }
                         }

@@ -12,7 +12,7 @@ pub mod twin;
 use crate::image::Hdr;
 use crate::math::{cosine_hemisphere, rng, triangle_barycentrics};
 use crate::scene::Frame;
-use crate::trace::Tracer;
+use crate::trace::{Next, PathRay, Tracer};
 use glam::{Vec2, Vec3};
 use rand::Rng;
 use rayon::prelude::*;
@@ -181,33 +181,32 @@ pub fn radiance_capped_from(
 ) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
-    let mut o = origin;
+    let mut ray = PathRay::free(origin, dir);
     let mut d = dir;
     let mut pdf_bsdf = 0.0f32; // pdf of the direction that reached this vertex (0: camera ray)
     let mut depth = 0u32;
     let env = frame.emitters.environment.as_deref();
-    // The normal of the surface the ray leaves (None: the camera's ray).
-    let mut from: Option<Vec3> = None;
     loop {
-        let Some(h) = tracer.intersect(o, d, f32::INFINITY) else {
-            // Out to the environment: all of it for a camera ray, else its MIS weight
-            // against the environment's own sampling.
-            if let Some(env) = env {
-                let le = env.radiance(d);
-                l += beta
-                    * le
-                    * if pdf_bsdf == 0.0 {
-                        1.0
-                    } else {
-                        power_heuristic(pdf_bsdf, env.pdf(d))
-                    };
+        let h = match tracer.follow(&ray, f32::INFINITY) {
+            Next::Hit(h) => h,
+            // Into a gap thinner than the tracer resolves: its light does not come back.
+            Next::Sealed => break,
+            Next::Miss => {
+                // Out to the environment: all of it for a camera ray, else its MIS weight
+                // against the environment's own sampling.
+                if let Some(env) = env {
+                    let le = env.radiance(d);
+                    l += beta
+                        * le
+                        * if pdf_bsdf == 0.0 {
+                            1.0
+                        } else {
+                            power_heuristic(pdf_bsdf, env.pdf(d))
+                        };
+                }
+                break;
             }
-            break;
         };
-        // Into a gap thinner than the tracer resolves: its light does not come back.
-        if from.is_some_and(|n| tracer.seals(n, d, h.t)) {
-            break;
-        }
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
@@ -270,8 +269,7 @@ pub fn radiance_capped_from(
         // Continue by cosine sampling: f cos / pdf = rho.
         d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
         pdf_bsdf = n.dot(d).max(1e-8) / PI;
-        o = tracer.offset(x, n, d);
-        from = Some(n);
+        ray = tracer.leave(x, n, d);
         beta *= rho;
         depth += 1;
         if depth >= RR_DEPTH {

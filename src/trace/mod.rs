@@ -18,6 +18,42 @@ pub struct Hit {
     pub b2: f32,
 }
 
+/// A ray of a light-transport path (the path tracer's, a light path's, a compensation walk's,
+/// stochastic radiosity's): from the eye or a light ([`PathRay::free`]), or leaving a surface
+/// ([`Tracer::leave`]), whose next hit [`Tracer::follow`] ends if it lies in a gap thinner
+/// than the tracer resolves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathRay {
+    pub origin: Vec3,
+    /// Unit direction.
+    pub dir: Vec3,
+    /// The normal of the surface it leaves (None: from no surface).
+    from: Option<Vec3>,
+}
+
+impl PathRay {
+    /// A ray from no surface: the eye, a punctual light, the environment.
+    pub fn free(origin: Vec3, dir: Vec3) -> Self {
+        PathRay {
+            origin,
+            dir,
+            from: None,
+        }
+    }
+}
+
+/// Where a [`PathRay`] goes next.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Next {
+    /// It hits `Hit`.
+    Hit(Hit),
+    /// Into a gap thinner than the tracer resolves ([`Tracer::seals`]): its path ends, as
+    /// such a gap takes in light and gives none back.
+    Sealed,
+    /// Out of the scene.
+    Miss,
+}
+
 /// Ray-tracing acceleration over one frame's triangles: a BVH over the triangles that have
 /// not moved and a small one over those that have (an animated emitter, a moving object), so
 /// that a frame in which a few triangles move rebuilds only the small one.
@@ -312,8 +348,38 @@ impl Tracer {
     /// [`SEAL`] of the scene's size off the plane it left. A light path (or a camera path) ends there: such
     /// a gap takes in light and gives none back (docs/math.md, "Gaps thinner than the scene
     /// resolves").
-    pub fn seals(&self, n: Vec3, dir: Vec3, t: f32) -> bool {
+    fn seals(&self, n: Vec3, dir: Vec3, t: f32) -> bool {
         t * n.dot(dir).abs() < SEAL * self.size
+    }
+
+    /// The ray that leaves the surface at `p` (normal `n`, either side) along `dir` (unit):
+    /// from [`Tracer::offset`] off it, to be followed by [`Tracer::follow`] or
+    /// [`Tracer::follow_light`], which end it in a gap thinner than the tracer resolves.
+    pub fn leave(&self, p: Vec3, n: Vec3, dir: Vec3) -> PathRay {
+        PathRay {
+            origin: self.offset(p, n, dir),
+            dir,
+            from: Some(n),
+        }
+    }
+
+    /// Where `ray` goes within `tmax`, as a receiver sees ([`Tracer::intersect`]): its
+    /// closest hit, sealed in a gap thinner than the tracer resolves, or a miss.
+    pub fn follow(&self, ray: &PathRay, tmax: f32) -> Next {
+        self.next(ray, self.intersect(ray.origin, ray.dir, tmax))
+    }
+
+    /// [`Tracer::follow`] for a light path's ray ([`Tracer::intersect_light`]).
+    pub fn follow_light(&self, ray: &PathRay, tmax: f32) -> Next {
+        self.next(ray, self.intersect_light(ray.origin, ray.dir, tmax))
+    }
+
+    fn next(&self, ray: &PathRay, hit: Option<Hit>) -> Next {
+        match hit {
+            None => Next::Miss,
+            Some(h) if ray.from.is_some_and(|n| self.seals(n, ray.dir, h.t)) => Next::Sealed,
+            Some(h) => Next::Hit(h),
+        }
     }
 
     /// Closest hit along `dir` (unit) from `origin`, within `tmax`, as a receiver there sees
@@ -610,15 +676,28 @@ mod tests {
                         Vec3::Y,
                         glam::Vec2::new(0.9 * r.random::<f32>(), r.random()),
                     );
+                    let ray = tr.leave(x, Vec3::Y, w);
                     let h = tr
-                        .intersect_light(tr.offset(x, Vec3::Y, w), w, f32::INFINITY)
+                        .intersect_light(ray.origin, w, f32::INFINITY)
                         .expect("the upper plate");
                     assert!(h.tri >= 2, "scale {scale}, gap {gap}: hit its own plate");
-                    assert_eq!(
-                        tr.seals(Vec3::Y, w, h.t),
-                        sealed,
-                        "scale {scale}, gap {share} seals, along {w}"
-                    );
+                    let next = tr.follow_light(&ray, f32::INFINITY);
+                    if sealed {
+                        assert_eq!(
+                            next,
+                            Next::Sealed,
+                            "scale {scale}, gap {share} seals, along {w}"
+                        );
+                    } else {
+                        assert_eq!(
+                            next,
+                            Next::Hit(h),
+                            "scale {scale}, gap {share} seals, along {w}"
+                        );
+                    }
+                    // From no surface, nothing seals.
+                    let free = PathRay::free(ray.origin, w);
+                    assert_eq!(tr.follow(&free, f32::INFINITY), Next::Hit(h));
                 }
             }
         }

@@ -12,7 +12,7 @@
 
 use crate::math::{basis, cosine_hemisphere, rng, triangle_barycentrics};
 use crate::scene::{Frame, LightKind, PunctualLight};
-use crate::trace::Tracer;
+use crate::trace::{Next, PathRay, Tracer};
 use glam::{Vec2, Vec3};
 use rand::Rng;
 use rayon::prelude::*;
@@ -86,11 +86,9 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         (u - env) / (1.0 - env)
     };
     let share = em.area_share();
-    // The normal of the surface the path's ray leaves (None: from no surface).
-    let mut from: Option<Vec3> = None;
-    let (mut origin, mut dir, mut power) = if u < 0.0 {
+    let (mut ray, mut power) = if u < 0.0 {
         let (o, d, power) = super::environment::emit(em, &mut r);
-        (o, d, power / env)
+        (PathRay::free(o, d), power / env)
     } else if u < share {
         let (e, p_e) = em.pick(u / share);
         let tri = em.tris[e] as usize;
@@ -105,13 +103,15 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
         // Le * cos / (p_e / A * cos / pi)
         let power = frame.emission_at(tri, b.x, b.y)
             * (std::f32::consts::PI * frame.areas[tri] / (p_e * share * (1.0 - env)));
-        from = Some(n);
-        (tracer.offset(x, n, dir), dir, power)
+        (tracer.leave(x, n, dir), power)
     } else {
         let v = ((u - share) / (1.0 - share)).min(1.0 - 1e-7);
         let (i, p) = em.pick_light(v);
         let (o, d, power) = emit(&em.lights[i], em.sphere, &mut r);
-        (o, d, power / (p * (1.0 - share) * (1.0 - env)))
+        (
+            PathRay::free(o, d),
+            power / (p * (1.0 - share) * (1.0 - env)),
+        )
     };
     if power == Vec3::ZERO {
         return out;
@@ -123,13 +123,12 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
     // whether its own coin found it sealed (None: its coin was not tossed).
     let mut last: Option<(Vec3, Option<bool>)> = None;
     for depth in 1..=MAX_DEPTH {
-        let Some(h) = tracer.intersect_light(origin, dir, f32::INFINITY) else {
-            break;
+        let (origin, dir) = (ray.origin, ray.dir);
+        let h = match tracer.follow_light(&ray, f32::INFINITY) {
+            Next::Hit(h) => h,
+            // Into a gap thinner than the tracer resolves: its light does not come back.
+            Next::Sealed | Next::Miss => break,
         };
-        // Into a gap thinner than the tracer resolves: its light does not come back.
-        if from.is_some_and(|n| tracer.seals(n, dir, h.t)) {
-            break;
-        }
         let tri = h.tri as usize;
         let x = frame.point(tri, h.b1, h.b2);
         let ng = frame.normals[tri];
@@ -217,9 +216,8 @@ pub fn trace_path(frame: &Frame, tracer: &Tracer, seed: u64, path: u64) -> Vec<V
             break;
         }
         power *= albedo / q;
-        dir = cosine_hemisphere(nf, Vec2::new(r.random(), r.random()));
-        origin = tracer.offset(x, nf, dir);
-        from = Some(nf);
+        let dir = cosine_hemisphere(nf, Vec2::new(r.random(), r.random()));
+        ray = tracer.leave(x, nf, dir);
     }
     out
 }
