@@ -169,7 +169,11 @@ pub fn compensate(
 /// (at least half of `max_rounds`), its first one not kept, with its share of [`WALKS`], from
 /// the slices of one Latin hypercube over all of them (`Points`): the few of its camera points
 /// that see into the crevice are as many as the sliver it sees through is high, whatever the
-/// random numbers.
+/// random numbers. One that sees into it through a sliver takes as many rounds as give it
+/// [`SLIVER_POINTS`] camera points in it, by 256 finer camera rays' count of the sliver
+/// (`PROBES`), up to [`SLIVER_ROUNDS`] times `max_rounds` (with `max_rounds` 1, every pixel
+/// takes one round). The finer rays are not part of the estimate, so the rounds they ask
+/// for bias nothing.
 /// (The number of rounds depends on the first round's samples, which the mean keeps, so where
 /// it varies from seed to seed the estimate is biased, as any adaptive sampling that keeps its
 /// pilot; docs/math.md, "Rounds of compensation paths", measures it.)
@@ -234,16 +238,32 @@ pub fn compensate_in_rounds(
             // A pixel across an edge may see into a crevice through a sliver thinner than
             // its paths' strata (a 1 mm gap's mouth at 32 x 32 is a hundredth of a pixel),
             // which its first round may miss: if finer camera rays find it, all rounds.
+            // How much of the pixel the sliver is: finer camera rays count its points.
+            let sliver = if first.edge || first.sealed {
+                sealed_probes(frame, tracer, pixel, &mut r)
+            } else {
+                0
+            };
             let mut walks = first.sealed;
-            if first.edge && !first.sealed && sees_a_crevice(frame, tracer, pixel, &mut r) {
+            if first.edge && !first.sealed && sliver > 0 {
                 (rounds, walks) = (most, true);
             }
-            // Its walks cut short by the pilot's share: they go again with a walker's share.
-            walks |= budget == 0;
             // A walker's first round saw the crevice at a point or two: its variance says
-            // little of how many rounds the crevice needs. At least half of them.
-            if walks {
-                rounds = rounds.max(most.div_ceil(2));
+            // little of how many rounds the crevice needs. At least half of them, and as
+            // many as give it SLIVER_POINTS camera points in the crevice, up to SLIVER_ROUNDS
+            // times the most (but for one round at most, which is one round for every pixel):
+            // a walk's light is heavy-tailed, and the few points of a thin sliver left the
+            // pixel's light varying by half its mean from seed to seed.
+            if walks && most > 1 {
+                let per_round = sliver.max(1) as f32 / PROBES as f32 * rays as f32;
+                let wanted = (SLIVER_POINTS as f32 / per_round).ceil() as u32;
+                rounds = rounds
+                    .max(most.div_ceil(2))
+                    .max(wanted.min(SLIVER_ROUNDS * most));
+            }
+            // Its walks cut short by the pilot's share: they go again with a walker's share.
+            if budget == 0 && !walks {
+                (rounds, walks) = (rounds.max(most.div_ceil(2)), true);
             }
             Pilot {
                 r,
@@ -322,9 +342,22 @@ struct Round {
 /// by several times its mean (docs/math.md, "Into a 1 mm gap").
 pub const SPLIT: u32 = 16;
 
-/// Camera rays with which [`sees_a_crevice`] looks for one: as many rows and columns of the
-/// pixel, one ray in each (a sliver a hundredth of the pixel wide, at any angle, meets two or
-/// three). At 256 x 256 they cost the 1 cm gap's box 0.4 s a frame, 1024 of them 0.8 s.
+/// Camera points in a crevice that a pixel seeing into it through a sliver gets, in as many
+/// rounds as its finer camera rays (`PROBES`) say it takes, [`SLIVER_ROUNDS`] times the most
+/// rounds at most: a walk's light is heavy-tailed (a few go deep and carry most of it), and
+/// with the 10 or so points that 16 rounds put in a hundredth of a pixel, the compensation of
+/// the 1 mm gap's mouth at 32 x 32 varied by 0.22-0.27 of its mean from seed to seed (with
+/// these, 0.10-0.15; docs/math.md, "Into a 1 mm gap").
+pub const SLIVER_POINTS: u32 = 64;
+
+/// How many times the most rounds a pixel that sees into a crevice through a sliver takes at
+/// most ([`SLIVER_POINTS`]); the frame's walks stay within [`PILOT_WALKS`] and [`WALKS`].
+pub const SLIVER_ROUNDS: u32 = 4;
+
+/// Camera rays with which [`sealed_probes`] counts a sliver's points: as many rows and
+/// columns of the pixel, one ray in each (a sliver a hundredth of the pixel wide, at any angle,
+/// meets two or three). At 256 x 256 they cost the 1 cm gap's box 0.4 s a frame, 1024 of them
+/// 0.8 s.
 const PROBES: u32 = 256;
 
 /// Whether the surface point `x` (normal `n`) is sealed in a crevice: a ray along its normal
@@ -353,25 +386,28 @@ fn latin_cell(k: usize, row: u32, n: u32, r: &mut impl Rng) -> Vec2 {
     )
 }
 
-/// Whether one of [`PROBES`] camera rays over the pixel (one in each of as many rows and
-/// columns) sees a point sealed in a crevice.
-fn sees_a_crevice(
+/// How many of [`PROBES`] camera rays over the pixel (one in each of as many rows and
+/// columns) see a point sealed in a crevice.
+fn sealed_probes(
     frame: &Frame,
     tracer: &Tracer,
     (corner, (width, height)): (Vec2, (u32, u32)),
     r: &mut impl Rng,
-) -> bool {
+) -> u32 {
     let rows = shuffled_rows(PROBES, r);
-    rows.iter().enumerate().any(|(k, &row)| {
+    let mut sealed = 0;
+    for (k, &row) in rows.iter().enumerate() {
         let sub = latin_cell(k, row, PROBES, r);
         let d = frame.camera.ray_dir(corner + sub, width, height);
-        tracer
-            .intersect(frame.camera.position, d, f32::INFINITY)
-            .is_some_and(|h| {
-                let s = SurfacePoint::seen(frame, &h, d);
-                sealed_at(tracer, s.x, s.n)
-            })
-    })
+        let hit = tracer.intersect(frame.camera.position, d, f32::INFINITY);
+        if hit.is_some_and(|h| {
+            let s = SurfacePoint::seen(frame, &h, d);
+            sealed_at(tracer, s.x, s.n)
+        }) {
+            sealed += 1;
+        }
+    }
+    sealed
 }
 
 /// The camera points of a round: of the pixel's Latin hypercube whose point k lies in column k
