@@ -182,11 +182,11 @@ pub fn radiance_capped_from(
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let mut ray = PathRay::free(origin, dir);
-    let mut d = dir;
     let mut pdf_bsdf = 0.0f32; // pdf of the direction that reached this vertex (0: camera ray)
     let mut depth = 0u32;
     let env = frame.emitters.environment.as_deref();
     loop {
+        let d = ray.dir;
         let h = match tracer.follow(&ray, f32::INFINITY) {
             Next::Hit(h) => h,
             // Into a gap thinner than the tracer resolves: its light does not come back.
@@ -267,7 +267,7 @@ pub fn radiance_capped_from(
             }
         }
         // Continue by cosine sampling: f cos / pdf = rho.
-        d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
+        let d = cosine_hemisphere(n, Vec2::new(r.random(), r.random()));
         pdf_bsdf = n.dot(d).max(1e-8) / PI;
         ray = tracer.leave(x, n, d);
         beta *= rho;
