@@ -347,8 +347,11 @@ pub const SPLIT: u32 = 16;
 /// rounds at most: a walk's light is heavy-tailed (a few go deep and carry most of it), and
 /// with the 10 or so points that 16 rounds put in a hundredth of a pixel, the compensation of
 /// the 1 mm gap's mouth at 32 x 32 varied by 0.22-0.27 of its mean from seed to seed (with
-/// these, 0.10-0.15; docs/math.md, "The mouth's sliver, and the judge's own noise").
-pub const SLIVER_POINTS: u32 = 64;
+/// these, 0.09-0.13). About what the walkers' floor of 8 rounds gives a sliver a tenth of the
+/// pixel (the 1 mm gap's mouth at 256 x 256), which takes no more rounds: 64 points took it
+/// to 10-11 and that frame 1.2 s longer (docs/math.md, "The mouth's sliver, and the judge's own
+/// noise").
+pub const SLIVER_POINTS: u32 = 48;
 
 /// How many times the most rounds a pixel that sees into a crevice through a sliver takes at
 /// most ([`SLIVER_POINTS`]); the frame's walks stay within [`PILOT_WALKS`] and [`WALKS`].

@@ -427,9 +427,9 @@ fn the_gap_sweep_against_the_reference() {
         Compensate::Auto,
     );
     // Measured (docs/math.md, "The mouth's sliver, and the judge's own noise"): the largest
-    // relMSE 0.042 and 0.043 at 1 cm (+0.5%, +1.0%), 0.029 at 0.1 mm and less, the mean bias
-    // +2.1% to +2.3%; at 1 mm, on 4 x 4 blocks against the true image, 0.029 and 0.029, the mean
-    // -2.0% and -4.1% (seeds -9.4% to +4.6%). Stop 52, before the sliver's rounds: -5.5% and
+    // relMSE 0.042 and 0.043 at 1 cm (+0.6%, +0.8%), 0.029 at 0.1 mm and less, the mean bias
+    // +2.1% to +2.3%; at 1 mm, on 4 x 4 blocks against the true image, 0.029 and 0.028, the mean
+    // -2.6% and -3.4% (seeds -9.8% to +4.6%). Stop 52, before the sliver's rounds: -5.5% and
     // -4.9% (seeds -10.7% to -0.9%; over 16 seeds -2.2% +- 1.2% and -2.2% +- 1.6%).
     // At the old ray offset, against its judge (stop 51), -0.5% and -2.3%, and over 16 seeds
     // -4.4% and -3.3%; with the walkers' rounds each a hypercube of its own (stop 50), -6.4%
@@ -442,9 +442,9 @@ fn the_gap_sweep_against_the_reference() {
 
 /// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "The mouth's
 /// sliver, and the judge's own noise"): the largest relMSE 0.044 and 0.035 at 1 cm, 0.022 and
-/// less below 1 mm, the mean bias -1.1% to +1.1%; at 1 mm, on blocks against the true image,
-/// 0.023 and 0.025, the mean -0.3% and -3.1% (seeds -5.5% to +1.6%; over 16 seeds -1.6% and
-/// -2.1%, [`the_default_samplers_one_mm_rows_over_16_seeds`]). Stop 52: -2.8% and -3.7%;
+/// less below 1 mm, the mean bias -1.0% to +1.1%; at 1 mm, on blocks against the true image,
+/// 0.023 and 0.024, the mean -0.9% and -2.4% (seeds -6.9% to +1.6%; over 16 seeds -1.8% and
+/// -2.5%, [`the_default_samplers_one_mm_rows_over_16_seeds`]). Stop 52: -2.8% and -3.7%;
 /// stop 51, at the old ray offset against its judge: -0.5% and -1.6%; stop 50: -6.5% and
 /// -4.6%; stop 49: -8.7% and -7.0%; before the compensation walked the gap, 0.049 and 0.050,
 /// 27-29% under.
@@ -463,7 +463,7 @@ fn the_gap_sweep_with_the_default_sampler() {
 /// into the gap's mouth, and the light paths out of it), so four seeds' mean has a standard
 /// error of about 1.6%, and the judge's own is 1.1% (docs/math.md, "The mouth's sliver, and
 /// the judge's own noise"); [`the_default_samplers_one_mm_rows_over_16_seeds`] holds `mh`'s
-/// bias to 5% over 16 seeds too. Measured at stop 53: seeds 1-4 -4.1% to -0.3%. At stop 52,
+/// bias to 5% over 16 seeds too. Measured at stop 53: seeds 1-4 -3.4% to -0.9%. At stop 52,
 /// before a pixel that sees the gap through a sliver took rounds for its points in it, the
 /// rows' frames swung by about 5%: -5.5% to -2.8%, and this bound was 8%; at stop 51, at the
 /// old offset of 1e-4 (a fifth of the gap), whose judge carried 8% too much of the gap's light,
@@ -838,8 +838,8 @@ fn one_mm_rows_over_16_seeds(
 /// camera's view into the gap's mouth, a hundredth of a pixel high, carries a quarter of the
 /// image): the default sampler's rows, both sides, over 16 seeds against the true image,
 /// their mean bias within 5%, the median relMSE within 0.025 and every seed's within 0.05
-/// (measured at stop 53: -1.6% +- 0.8% and -2.1% +- 0.8%, medians 0.017 and 0.016, the
-/// largest 0.023 and 0.025; at stop 52, before a pixel that sees the gap through a sliver
+/// (measured at stop 53: -1.8% +- 0.8% and -2.5% +- 0.8%, medians 0.017 and 0.015, the
+/// largest 0.023 and 0.024; at stop 52, before a pixel that sees the gap through a sliver
 /// took rounds for its points in it, -1.8% +- 0.9% and -2.2% +- 1.3%, and the largest 0.023
 /// and 0.058, seed 15 single-sided, one pixel of the mouth at three times its mean). About 3
 /// minutes here.
@@ -860,7 +860,7 @@ fn the_default_samplers_one_mm_rows_over_16_seeds() {
 
 /// Both samplers' 1 mm rows over 16 seeds ([`one_mm_rows_over_16_seeds`]; a measurement:
 /// `--ignored`, about 7 minutes): docs/math.md, "The mouth's sliver, and the judge's own noise"
-/// (stop 53: -1.6% to -2.1%, standard errors 0.8-1.1%, relMSE medians 0.016-0.018, every seed
+/// (stop 53: -1.8% to -2.5%, standard errors 0.8-1.2%, relMSE medians 0.015-0.018, every seed
 /// within 0.029; stop 52: -1.8% to -2.2%, standard errors 0.9-1.6%, the largest 0.058; stop
 /// 51, at the old ray offset and against its judge: -4.5% to -3.3%).
 #[test]
@@ -1269,16 +1269,16 @@ fn the_compensation_carries_the_light_inside_a_one_mm_gap() {
 /// into the gap over about a hundredth of a pixel's height, which a round of 64 paths can miss,
 /// and a round that finds no light there asks for few more. The pixels of the lamp's front
 /// edge (row 3, columns 13-18, seeds 1-8, both sides) each take more than twice
-/// [`irad::compensation::MAX_ROUNDS`] (measured: 64, the most). Without the finer camera rays
+/// [`irad::compensation::MAX_ROUNDS`] (measured: 48-64). Without the finer camera rays
 /// that look for the gap in a pixel across an edge, seed 4's first pixel took 5; without the
 /// walkers' floor (stop 52), seed 3's fourth, a walker whose first round's variance asked for
 /// 6; before the sliver's rounds (stop 53) they took 8-16.
 ///
 /// And with them the light of that row's compensation varies less from seed to seed: its
-/// standard deviation over the 8 seeds, relative to its mean, under 0.2 (measured 0.098
-/// double-sided, 0.148 single-sided; with at most 16 rounds, `SLIVER_POINTS` 0, 0.219 and
-/// 0.270: a walk's light is heavy-tailed, and with the 10 or so points in the gap of 16 rounds
-/// one seed's row came out at 1.4 and 1.6 times the mean).
+/// standard deviation over the 8 seeds, relative to its mean, under 0.2 (measured 0.132
+/// double-sided, 0.094 single-sided; with `SLIVER_POINTS` 64, 0.098 and 0.148; with at most 16
+/// rounds, `SLIVER_POINTS` 0, 0.219 and 0.270: a walk's light is heavy-tailed, and with the 10
+/// or so points in the gap of 16 rounds one seed's row came out at 1.4 and 1.6 times the mean).
 #[test]
 fn pixels_that_see_into_a_one_mm_gap_take_every_round() {
     use irad::compensation::{compensate_in_rounds, Light, MAX_ROUNDS};
