@@ -244,26 +244,25 @@ pub fn compensate_in_rounds(
             } else {
                 0
             };
-            let mut walks = first.sealed;
-            if first.edge && !first.sealed && sliver > 0 {
-                (rounds, walks) = (most, true);
-            }
-            // A walker's first round saw the crevice at a point or two: its variance says
-            // little of how many rounds the crevice needs. At least half of them, and as
-            // many as give it SLIVER_POINTS camera points in the crevice, up to SLIVER_ROUNDS
-            // times the most (but for one round at most, which is one round for every pixel):
-            // a walk's light is heavy-tailed, and the few points of a thin sliver left the
-            // pixel's light varying by half its mean from seed to seed.
-            if walks && most > 1 {
-                let per_round = sliver.max(1) as f32 / PROBES as f32 * rays as f32;
-                let wanted = (SLIVER_POINTS as f32 / per_round).ceil() as u32;
-                rounds = rounds
-                    .max(most.div_ceil(2))
-                    .max(wanted.min(SLIVER_ROUNDS * most));
+            let sees = first.sealed || first.edge && sliver > 0;
+            if sees && !first.sealed {
+                rounds = most;
             }
             // Its walks cut short by the pilot's share: they go again with a walker's share.
-            if budget == 0 && !walks {
-                (rounds, walks) = (rounds.max(most.div_ceil(2)), true);
+            let walks = sees || budget == 0;
+            // A walker's first round saw the crevice at a point or two: its variance says
+            // little of how many rounds the crevice needs. At least half of them.
+            if walks {
+                rounds = rounds.max(most.div_ceil(2));
+            }
+            // And one that sees the crevice as many as give it SLIVER_POINTS camera points in
+            // it, up to SLIVER_ROUNDS times the most (but for one round at most, which is one
+            // round for every pixel): a walk's light is heavy-tailed, and the few points of a
+            // thin sliver left the pixel's light varying by half its mean from seed to seed.
+            if sees && most > 1 {
+                let per_round = sliver.max(1) as f32 / PROBES as f32 * rays as f32;
+                let wanted = (SLIVER_POINTS as f32 / per_round).ceil() as u32;
+                rounds = rounds.max(wanted.min(SLIVER_ROUNDS * most));
             }
             Pilot {
                 r,

@@ -47,8 +47,9 @@ impl PathRay {
 pub enum Next {
     /// It hits `Hit`.
     Hit(Hit),
-    /// Into a gap thinner than the tracer resolves ([`Tracer::seals`]): its path ends, as
-    /// such a gap takes in light and gives none back.
+    /// Into a gap thinner than the tracer resolves (its hit less than [`SEAL`] of the scene's
+    /// size off the plane it left): its path ends, as such a gap takes in light and gives none
+    /// back.
     Sealed,
     /// Out of the scene.
     Miss,
@@ -148,8 +149,8 @@ fn epsilon(p: Vec3, size: f32, ulps: f32) -> f32 {
     f32::EPSILON * (ulps * size).max(POINT_ULPS * p.abs().max_element())
 }
 
-/// The gap, as a share of the scene's size, narrower than which two facing surfaces are one
-/// ([`Tracer::seals`]).
+/// The gap, as a share of the scene's size, narrower than which two facing surfaces are one:
+/// a path ray into it is [`Next::Sealed`] ([`Tracer::follow`]).
 pub const SEAL: f32 = 1e-4;
 
 /// The power of two `k >= 1` that brings a scene of size `size` (its bounding box's largest
