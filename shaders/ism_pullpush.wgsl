@@ -14,7 +14,7 @@
 @group(0) @binding(1) var<storage, read_write> atlas: array<u32>;
 @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;
 @group(0) @binding(3) var<storage, read> slots: array<vec2u>;
-@group(0) @binding(4) var<storage, read_write> near: array<u32>;
+@group(0) @binding(4) var<storage, read_write> near: array<vec4f>;
 
 struct Level {
     level: u32,
@@ -88,17 +88,36 @@ fn decoded(e: u32) -> f32 {
     return select(f32(16777216u - e) / 16777215.0, -1.0, e == 0u);
 }
 
-// Level 0 at texel (x, y) of `slot`'s tile: the nearer of the splat's depth there and that of
-// the near-field cell it lies in (inverted depths: the larger). Tile sides are powers of two:
-// shifts, not divisions (which a software rasterizer does a lane at a time).
+// Level 0 at texel (x, y) of `slot`'s tile: the nearer of the splat's depth there and where
+// the texel's direction meets the plane of the near-field cell it lies in (inverted depths:
+// the larger). Tile sides are powers of two: shifts, not divisions (which a software
+// rasterizer does a lane at a time).
 fn texel_depth(slot: u32, x: u32, y: u32) -> f32 {
     let sh = countTrailingZeros(P.ism_size);
     var e = atlas[(slot << (2u * sh)) + (y << sh) + x];
     let n = P.near_grid;
     if n > 0u {
-        e = max(e, near[slot * n * n + ((y * n) >> sh) * n + ((x * n) >> sh)]);
+        e = max(e, plane_depth(near[slot * n * n + ((y * n) >> sh) * n + ((x * n) >> sh)], x, y));
     }
     return decoded(e);
+}
+
+// The inverted depth at which the direction of texel (x, y) (its centre mapped back from the
+// paraboloid, in the VPL's frame) meets a near-field cell's plane `q` (`near_plane` in
+// ism_splat.wgsl: its unit normal and its signed distance along it); 0 (none) for an empty
+// cell (zero normal) or a direction parallel to the plane or leaving it behind.
+fn plane_depth(q: vec4f, x: u32, y: u32) -> u32 {
+    let fs = f32(P.ism_size);
+    let u = (f32(x) + 0.5) / fs * 2.0 - 1.0;
+    let v = (f32(y) + 0.5) / fs * 2.0 - 1.0;
+    let r2 = u * u + v * v;
+    let w = vec3f(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+    let c = dot(q.xyz, w);
+    let t = q.w / c;
+    if !(c != 0.0 && t > 0.0) {
+        return 0u;
+    }
+    return 16777216u - u32(min(t / P.far, 1.0) * 16777215.0);
 }
 
 // The mean depth of the valid ones of four values as a value of level `level`, or a hole.
@@ -205,6 +224,6 @@ fn fused(@builtin(workgroup_id) wid: vec3u, @builtin(local_invocation_index) t: 
     storageBarrier();
     let n = P.near_grid;
     for (var c = t; c < n * n; c += FUSED_LANES) {
-        near[slot * n * n + c] = 0u;
+        near[slot * n * n + c] = vec4f(0.0);
     }
 }

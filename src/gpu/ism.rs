@@ -47,7 +47,7 @@ pub(crate) const SPLAT: Pass = Pass {
             read("vpls", Elem::Struct(&GpuVpl::LAYOUT)),
             read("slots", Elem::Plain(8)),
             read_write("atlas", Elem::Plain(4)),
-            read_write("near", Elem::Plain(4)),
+            read_write("near", Elem::Plain(16)),
         ],
     }],
 };
@@ -63,7 +63,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
                 read_write("atlas", Elem::Plain(4)),
                 read_write("pyramid", Elem::Plain(4)),
                 read("slots", Elem::Plain(8)),
-                read_write("near", Elem::Plain(4)),
+                read_write("near", Elem::Plain(16)),
             ],
         },
         Group {
@@ -76,6 +76,7 @@ pub(crate) const PULL_PUSH: Pass = Pass {
 pub struct Ism {
     clear: wgpu::ComputePipeline,
     splat: wgpu::ComputePipeline,
+    splat_near: wgpu::ComputePipeline,
     decode: wgpu::ComputePipeline,
     pull: wgpu::ComputePipeline,
     push: wgpu::ComputePipeline,
@@ -85,7 +86,9 @@ pub struct Ism {
     level_groups: Vec<wgpu::BindGroup>,
     /// What the splat writes: one tile of inverted depths (0: empty) a slot.
     pub atlas: wgpu::Buffer,
-    /// The near-field cells the splat writes: [`near_grid`]^2 inverted depths a slot.
+    /// The near-field cells the splat writes: [`near_grid`]^2 planes a slot (`vec4f`: the
+    /// unit normal of the triangle its ray hit, in the VPL's frame, and its signed distance
+    /// along it; zeros for none), see [`plane_depth`].
     pub near: wgpu::Buffer,
     /// Level 0 of the pyramid is the atlas the gather reads, its holes filled from level 1
     /// (see [`Ism::level1`]).
@@ -133,7 +136,7 @@ impl Ism {
         let atlas = gpu.buffer("ism atlas", atlas_bytes(tiles, size), rw);
         let near = gpu.buffer(
             "ism near-field cells",
-            bytes::<u32>(tiles as u64 * cells * cells),
+            bytes::<[f32; 4]>(tiles as u64 * cells * cells),
             rw,
         );
         let pyramid = gpu.buffer(
@@ -145,6 +148,8 @@ impl Ism {
         let l_splat = SPLAT.layouts(gpu);
         let splat = gpu.compute_pipeline(SPLAT.name, &m_splat, "main", &[&l_splat[0]]);
         let clear = gpu.compute_pipeline("ism clear", &m_splat, "clear", &[&l_splat[0]]);
+        let splat_near =
+            gpu.compute_pipeline("ism splat near", &m_splat, "near_main", &[&l_splat[0]]);
         let splat_group = SPLAT.groups[0].bind(
             gpu,
             SPLAT.name,
@@ -209,6 +214,7 @@ impl Ism {
         Ism {
             clear,
             splat,
+            splat_near,
             decode,
             pull,
             push,
@@ -244,11 +250,13 @@ impl Ism {
     /// Empties the tiles of the first `changed` entries of the slots buffer and splats their
     /// points; the other tiles are kept. The fused pull-push leaves the tiles it read empty,
     /// so tiles of at most [`FUSED_MAX`] texels need no clear but after [`Ism::forget`].
+    /// The ray-cast near-field points (`near_points` a slot) go first: the point set's
+    /// (`ism_points` a slot) reads their planes.
     pub fn encode_splat(
         &mut self,
         enc: &mut wgpu::CommandEncoder,
         changed: u32,
-        points_per_slot: u32,
+        (ism_points, near_points): (u32, u32),
     ) {
         debug_assert!(changed <= self.tiles);
         if changed == 0 {
@@ -269,12 +277,21 @@ impl Ism {
             );
         }
         self.unclean = false;
+        if near_points > 0 {
+            dispatch(
+                enc,
+                "ism splat near",
+                &self.splat_near,
+                &[&self.splat_group],
+                (near_points.div_ceil(64), changed, 1),
+            );
+        }
         dispatch(
             enc,
             "ism splat",
             &self.splat,
             &[&self.splat_group],
-            (points_per_slot.div_ceil(64), changed, 1),
+            (ism_points.div_ceil(64), changed, 1),
         );
     }
 
@@ -335,11 +352,43 @@ impl Ism {
 /// holds the coarser levels of one tile).
 pub const FUSED_MAX: u32 = 64;
 
+/// The inverted depth (0: none) at which the direction of texel (`x`, `y`) of a tile of side
+/// `size` (its centre mapped back from the paraboloid, in the VPL's frame) meets the plane of
+/// a near-field cell, `q` = its unit normal in that frame and its signed distance along it
+/// (`ism_splat.wgsl`, `near_plane`): none for an empty cell (zeros), a direction parallel to
+/// the plane or one that leaves it behind. `far` is the depths' scale (`FrameConstants::far`).
+///
+/// Why a plane and not the depth along the cell's ray: a cell is up to an eighth of the tile
+/// wide, and a VPL close to a surface (on a floor by a wall, in a crevice's mouth just under a
+/// ceiling) has a cell whose ray meets that surface while half the cell's directions pass
+/// beside it. One depth for the cell shut those directions too (a crevice's fans 1-5 mm under
+/// a ceiling lost 15% of their light against exact visibility; docs/math.md, "ISMs by a
+/// surface"); the plane shuts what lies beyond the surface and nothing beside it.
+pub fn plane_depth(q: [f32; 4], (x, y): (u32, u32), size: u32, far: f32) -> u32 {
+    let fs = size as f32;
+    let u = (x as f32 + 0.5) / fs * 2.0 - 1.0;
+    let v = (y as f32 + 0.5) / fs * 2.0 - 1.0;
+    let r2 = u * u + v * v;
+    let w = glam::Vec3::new(2.0 * u, 2.0 * v, 1.0 - r2) / (1.0 + r2);
+    let c = glam::Vec3::new(q[0], q[1], q[2]).dot(w);
+    let t = q[3] / c;
+    if !(c != 0.0 && t > 0.0) {
+        return 0;
+    }
+    16777216 - ((t / far).min(1.0) * 16777215.0) as u32
+}
+
 /// CPU twin of the pull-push: level 0 of one tile of side `size` from its atlas texels
-/// (inverted depths, 0: empty) and its `n` x `n` near-field cells (`near`, inverted depths; n =
-/// 0: none), each texel the nearer of its own and its cell's, holes filled from up to
-/// `levels` coarser levels; a value is `depth + 4 * level`, -1 a hole left open.
-pub fn pull_push(atlas: &[u32], (n, near): (u32, &[u32]), size: u32, levels: u32) -> Vec<f32> {
+/// (inverted depths, 0: empty) and its `n` x `n` near-field cells (`near`, planes, see
+/// [`plane_depth`]; n = 0: none), each texel the nearer of its own depth and where its
+/// direction meets its cell's plane, holes filled from up to `levels` coarser levels; a value
+/// is `depth + 4 * level`, -1 a hole left open.
+pub fn pull_push(
+    atlas: &[u32],
+    (n, near): (u32, &[[f32; 4]]),
+    (size, far): (u32, f32),
+    levels: u32,
+) -> Vec<f32> {
     let levels = pull_levels_run(size, levels);
     let decoded = |e: u32| {
         if e == 0 {
@@ -353,7 +402,12 @@ pub fn pull_push(atlas: &[u32], (n, near): (u32, &[u32]), size: u32, levels: u32
     let level0 = (0..size * size).map(|i| {
         let e = atlas[i as usize];
         decoded(if n > 0 {
-            e.max(near[cell(i) as usize])
+            e.max(plane_depth(
+                near[cell(i) as usize],
+                (i % size, i / size),
+                size,
+                far,
+            ))
         } else {
             e
         })
@@ -430,14 +484,21 @@ mod tests {
                     }
                 })
                 .collect();
-            // A third of the cells hold a depth.
+            // A third of the cells hold a plane: a unit normal, at 1-60% of `far` either way.
             let n = if cells { near_grid(size, levels) } else { 0 };
-            let near: Vec<u32> = (0..(slots * n * n) as usize)
+            let far = 3.0f32;
+            let near: Vec<[f32; 4]> = (0..(slots * n * n) as usize)
                 .map(|_| {
                     if r.random::<f64>() < 0.3 {
-                        r.random_range(1..=16777216u32)
+                        let z: f32 = r.random_range(-1.0..1.0);
+                        let phi = r.random_range(0.0..std::f32::consts::TAU);
+                        let s = (1.0 - z * z).sqrt();
+                        let m = glam::Vec3::new(s * phi.cos(), s * phi.sin(), z);
+                        let c =
+                            r.random_range(0.01..0.6) * far * if r.random() { 1.0 } else { -1.0 };
+                        [m.x, m.y, m.z, c]
                     } else {
-                        0
+                        [0.0; 4]
                     }
                 })
                 .collect();
@@ -447,6 +508,7 @@ mod tests {
                 pull_levels: levels,
                 num_changed: changed.len() as u32,
                 near_grid: n,
+                far,
                 ..bytemuck::Zeroable::zeroed()
             };
             let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
@@ -495,20 +557,25 @@ mod tests {
                 bytemuck::cast_slice(&bytes)[..len].to_vec()
             };
             let atlas_after = read_u32(&ism.atlas, atlas.len());
-            let near_after = read_u32(&ism.near, near.len());
+            let near_after: Vec<[f32; 4]> = {
+                let bytes = gpu
+                    .read_buffer(&ism.near, (16 * near.len()).max(4) as u64)
+                    .unwrap();
+                bytemuck::cast_slice(&bytes[..16 * near.len()]).to_vec()
+            };
             let cells_of = (n as usize).pow(2);
             for tile in 0..slots as usize {
                 let redone = changed.iter().any(|c| c[0] as usize == tile);
                 let emptied = redone && size <= FUSED_MAX;
                 let texels = tile * per_tile..(tile + 1) * per_tile;
                 let cells = tile * cells_of..(tile + 1) * cells_of;
-                for (after, before, range) in
-                    [(&atlas_after, &atlas, texels), (&near_after, &near, cells)]
-                {
-                    for i in range {
-                        let want = if emptied { 0 } else { before[i] };
-                        assert_eq!(after[i], want, "size {size}, tile {tile}, entry {i}");
-                    }
+                for i in texels {
+                    let want = if emptied { 0 } else { atlas[i] };
+                    assert_eq!(atlas_after[i], want, "size {size}, tile {tile}, texel {i}");
+                }
+                for i in cells {
+                    let want = if emptied { [0.0; 4] } else { near[i] };
+                    assert_eq!(near_after[i], want, "size {size}, tile {tile}, cell {i}");
                 }
             }
             for tile in 0..slots as usize {
@@ -517,7 +584,7 @@ mod tests {
                 let cells = (n as usize).pow(2);
                 let own = (n, &near[(tile * cells).min(near.len())..]);
                 let want = if redone {
-                    pull_push(&atlas[range.clone()], own, size, levels)
+                    pull_push(&atlas[range.clone()], own, (size, far), levels)
                 } else {
                     vec![0.0; per_tile] // never written: the buffer's zeros
                 };

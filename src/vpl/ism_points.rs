@@ -133,9 +133,10 @@ pub fn near_directions(n: u32) -> Vec<Vec3> {
 /// points while it covers most of the VPL's tile; the tile is then mostly holes and the VPL
 /// shines through it. A VPL in a thin gap (between a lamp's top and the ceiling) sees the
 /// room through its whole tile instead of a sliver. The ray-cast points are spread by solid
-/// angle, so whatever a VPL sees first closes its tile: the splat keeps the nearest depth of
-/// each ray's cell of the tile (the n x n grid whose centres the rays go through), and every
-/// texel of the cell takes it where its own splat is farther or empty.
+/// angle, so whatever a VPL sees first closes its tile: the splat keeps the plane of the
+/// triangle each ray hit for its cell of the tile (the n x n grid whose centres the rays go
+/// through), and every texel of the cell takes the depth at which its own direction meets
+/// that plane where its own splat is farther or empty (`gpu::ism::plane_depth`).
 pub fn near_points(
     tracer: &crate::trace::Tracer,
     vpls: &[super::ShadedVpl],

@@ -203,10 +203,10 @@ graph! {
         when: "always (only the slots whose VPL or geometry changed)",
         reads: &["tris", "points", "vpls", "slots"],
         writes: &["ism atlas"],
-        what: "each redrawn slot's paraboloid tile: the nearest depth per texel of its subset of the point set (`atomicMax` on an inverted depth), and its near-field cells from its ray-cast points",
+        what: "each redrawn slot's near-field cells, the plane each of its ray-cast points lies on, then its paraboloid tile: the nearest depth per texel of its subset of the point set (`atomicMax` on an inverted depth) but for points on their cell's plane",
         runs: always,
         encode: |r, enc, f| {
-            let points = r.config.ism_points + r.near_points(f.input);
+            let points = (r.config.ism_points, r.near_points(f.input));
             r.passes.ism.encode_splat(enc, f.changed_slots, points);
             Ok(())
         },
