@@ -1,9 +1,10 @@
 // Pull-push hole filling within each ISM tile. The pyramid holds `depth + 4 * level` (depth
 // normalized to [0,1], level the pyramid level whose footprint the value stands for), -1 for a
-// hole. `decode` turns the splat atlas into level 0 (each texel the nearer of its own depth and
-// its near-field cell's, see `texel_depth`); `pull` averages the valid children into
-// the next coarser level; `push` fills holes of a level from its (already filled) parent, so a
-// filled texel says which coarser footprint its depth came from (see `ism_depth` in common).
+// hole. `decode` turns the splat atlas into level 0 (each texel the nearer of its own depth
+// and where its direction meets its near-field cell's plane, see `texel_depth`); `pull`
+// averages the valid children into the next coarser level; `push` fills holes of a level
+// from its (already filled) parent, so a filled texel says which coarser footprint its depth
+// came from (see `ism_depth` in common).
 // Push stops at level 1: the gather reads level 0 and, at a hole, its parent in level 1
 // (`ism_lookup` in gather.wgsl), the value push would have written there.
 // Tiles of at most 64 texels a side take `fused` instead: all of it in one dispatch, the

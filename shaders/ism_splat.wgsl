@@ -123,8 +123,9 @@ fn near_cell(s: u32, texel: u32) -> u32 {
 
 // The plane through a near-field point at `d` from its VPL (normal `n`), with the unit
 // normal `m` of the triangle it lies on: `m` in the VPL's frame (t, b, n, as
-// `paraboloid_texel` reads directions) and the signed distance `dot(m, d)`, so that a
-// direction `w` of that frame meets it at `w.dot(m) / dot(m, d)`'s inverse (`texel_depth`).
+// `paraboloid_texel` reads directions) and the signed distance `dot(m, d)`, so that a unit
+// direction `w` of that frame meets it at `dot(m, d) / dot(m, w)` (`plane_depth` in
+// ism_pullpush.wgsl).
 fn near_plane(m: vec3f, d: vec3f, n: vec3f) -> vec4f {
     return vec4f(dot(m, basis_t(n)), dot(m, basis_b(n)), dot(m, n), dot(m, d));
 }
