@@ -358,12 +358,13 @@ pub const FUSED_MAX: u32 = 64;
 /// (`ism_splat.wgsl`, `near_plane`): none for an empty cell (zeros), a direction parallel to
 /// the plane or one that leaves it behind. `far` is the depths' scale (`FrameConstants::far`).
 ///
-/// Why a plane and not the depth along the cell's ray: a cell is up to an eighth of the tile
-/// wide, and a VPL close to a surface (on a floor by a wall, in a crevice's mouth just under a
-/// ceiling) has a cell whose ray meets that surface while half the cell's directions pass
-/// beside it. One depth for the cell shut those directions too (a crevice's fans 1-5 mm under
-/// a ceiling lost 15% of their light against exact visibility; docs/math.md, "ISMs by a
-/// surface"); the plane shuts what lies beyond the surface and nothing beside it.
+/// Why a plane and not the depth along the cell's ray: a cell is several texels wide (13 cells
+/// across the default 64-texel tile), and a VPL close to a surface (on a floor by a wall, in a
+/// crevice's mouth just under a ceiling) has cells whose ray meets that surface while part of
+/// the cell's directions pass beside it. One depth for the cell shut those directions too (a
+/// crevice's fans 1-5 mm under a ceiling kept 0.68-0.69 of their light against exact
+/// visibility, now 0.84-0.90; docs/math.md, "ISMs by a surface"); the plane shuts what lies
+/// beyond the surface and nothing beside it.
 pub fn plane_depth(q: [f32; 4], (x, y): (u32, u32), size: u32, far: f32) -> u32 {
     let fs = size as f32;
     let u = (x as f32 + 0.5) / fs * 2.0 - 1.0;
