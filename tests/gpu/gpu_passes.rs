@@ -571,6 +571,28 @@ fn interleave_filter_does_not_bleed_across_depth_or_normal_edges() {
     assert!(depth_edges > 0 && normal_edges > 0);
 }
 
+/// Twelve VPLs `under` the Cornell box's ceiling (at y = 1), leaving toward the walls at
+/// 0.05, 0.15 and 0.4 radians under a plane parallel to it: fans about that plane (`fan`), or
+/// cosine lobes about the same directions.
+fn fans_under_the_ceiling(under: f32, fan: bool) -> Vec<irad::vpl::ShadedVpl> {
+    let down = -glam::Vec3::Y;
+    (0..12)
+        .map(|k| {
+            let (x, z) = ([-0.6f32, 0.0, 0.6][k % 3], [-0.6f32, 0.3][(k / 3) % 2]);
+            let phi = k as f32 * 2.1;
+            let e = [0.05f32, 0.15, 0.4][k % 3];
+            let a = glam::Vec3::new(phi.cos(), 0.0, phi.sin());
+            irad::vpl::ShadedVpl {
+                position: glam::Vec3::new(x, 1.0 - under, z),
+                normal: a * e.cos() + down * e.sin(),
+                flux: glam::Vec3::splat(0.05),
+                near: None,
+                fan: fan.then_some(down),
+            }
+        })
+        .collect()
+}
+
 /// A VPL on the way out of a crevice lights a fan about the crevice's plane, not a cosine
 /// lobe about its direction (`vpl::fan_lobe`): the GPU's gather reads the fan's plane from the
 /// w's of its VPL record (`common.wgsl`, `vpl_lobe`) and must light what the CPU twin lights,
@@ -585,22 +607,7 @@ fn a_vpl_on_the_way_out_of_a_crevice_lights_its_fan_on_the_gpu_as_in_the_twin() 
     let (frame, points) = cornell_frame();
     let tracer = irad::trace::Tracer::new(&frame);
     let mut r = interleaved(&gpu, &frame, 1, 64);
-    let down = -glam::Vec3::Y;
-    let vpls: Vec<irad::vpl::ShadedVpl> = (0..12)
-        .map(|k| {
-            let (x, z) = ([-0.6f32, 0.0, 0.6][k % 3], [-0.6f32, 0.3][(k / 3) % 2]);
-            let phi = k as f32 * 2.1;
-            let e = [0.05f32, 0.15, 0.4][k % 3];
-            let a = glam::Vec3::new(phi.cos(), 0.0, phi.sin());
-            irad::vpl::ShadedVpl {
-                position: glam::Vec3::new(x, 0.6, z),
-                normal: a * e.cos() + down * e.sin(),
-                flux: glam::Vec3::splat(0.05),
-                near: None,
-                fan: Some(down),
-            }
-        })
-        .collect();
+    let vpls = fans_under_the_ceiling(0.4, true);
     let clamp = 0.07;
     let gpu_img = indirect(&mut r, &frame, &vpls, clamp);
     let twin = irad::reference::twin::gather(&frame, &tracer, &points, IW, IH, &vpls, clamp);
@@ -640,7 +647,6 @@ fn vpls_by_a_surface_are_shadowed_as_in_the_twin() {
     let (frame, points) = cornell_frame();
     let tracer = irad::trace::Tracer::new(&frame);
     let mut r = interleaved(&gpu, &frame, 1, 64);
-    let down = -glam::Vec3::Y;
     // Measured on lavapipe: fans 0.0091, 0.0589, 0.1017, 0.1553; cosine lobes 0.0161,
     // 0.0251, 0.0565, 0.0966. What is left at a few millimetres is the texels themselves
     // (a fan 0.05 radians under the plane lies within two texels of it).
@@ -652,21 +658,7 @@ fn vpls_by_a_surface_are_shadowed_as_in_the_twin() {
     ];
     for (under, fan_bound, cosine_bound) in cases {
         for (fan, bound) in [(true, fan_bound), (false, cosine_bound)] {
-            let vpls: Vec<irad::vpl::ShadedVpl> = (0..12)
-                .map(|k| {
-                    let (x, z) = ([-0.6f32, 0.0, 0.6][k % 3], [-0.6f32, 0.3][(k / 3) % 2]);
-                    let phi = k as f32 * 2.1;
-                    let e = [0.05f32, 0.15, 0.4][k % 3];
-                    let a = glam::Vec3::new(phi.cos(), 0.0, phi.sin());
-                    irad::vpl::ShadedVpl {
-                        position: glam::Vec3::new(x, 1.0 - under, z),
-                        normal: a * e.cos() + down * e.sin(),
-                        flux: glam::Vec3::splat(0.05),
-                        near: None,
-                        fan: fan.then_some(down),
-                    }
-                })
-                .collect();
+            let vpls = fans_under_the_ceiling(under, fan);
             let clamp = 0.07;
             let near = irad::gpu::ism::near_points(&tracer, &vpls, r.near_directions());
             let input = irad::gpu::GpuFrame {
