@@ -59,13 +59,14 @@ fn near_main(@builtin(global_invocation_id) gid: vec3u) {
     if pt.tri == 0xffffffffu {
         return;
     }
-    let at = seen(s, pt);
+    let tri = tris[pt.tri];
+    let v = vpls[s];
+    let at = seen(v, tri, pt);
     if at.w < 0.0 {
         return;
     }
     // One ray a cell, so one point a cell: a plain store.
-    let tri = tris[pt.tri];
-    near[near_cell(s, u32(at.w))] = near_plane(tri.n.xyz, at.xyz, vpls[s].normal.xyz);
+    near[near_cell(s, u32(at.w))] = near_plane(tri.n.xyz, at.xyz, v.normal.xyz);
 }
 
 @compute @workgroup_size(64)
@@ -77,7 +78,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     }
     let s = slots[k].x;
     let pt = points[(slots[k].y + j) % P.num_points];
-    let at = seen(s, pt);
+    let tri = tris[pt.tri];
+    let v = vpls[s];
+    let at = seen(v, tri, pt);
     if at.w < 0.0 {
         return;
     }
@@ -85,9 +88,9 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     let dist = length(d);
     if P.near_grid > 0u {
         let q = near[near_cell(s, u32(at.w))];
-        let n = vpls[s].normal.xyz;
+        let n = v.normal.xyz;
         let m = q.x * basis_t(n) + q.y * basis_b(n) + q.z * n;
-        if abs(dot(m, tris[pt.tri].n.xyz)) > 0.9999 && abs(dot(m, d) - q.w) <= 1e-4 * dist {
+        if abs(dot(m, tri.n.xyz)) > 0.9999 && abs(dot(m, d) - q.w) <= 1e-4 * dist {
             return;
         }
     }
@@ -95,13 +98,11 @@ fn main(@builtin(global_invocation_id) gid: vec3u) {
     atomicMax(&atlas[s * P.ism_size * P.ism_size + u32(at.w)], depth);
 }
 
-// Point `pt` as slot `s`'s VPL sees it: its offset from the VPL and its texel, or w = -1 where
-// it lies behind the VPL, on it, or is an open single-sided triangle facing it (which
-// shadows nothing, see shadow.wgsl).
-fn seen(s: u32, pt: Point) -> vec4f {
-    let tri = tris[pt.tri];
+// Point `pt` of triangle `tri` as VPL `v` sees it: its offset from the VPL and its texel, or
+// w = -1 where it lies behind the VPL, on it, or is an open single-sided triangle facing it
+// (which shadows nothing, see shadow.wgsl).
+fn seen(v: GpuVpl, tri: Tri, pt: Point) -> vec4f {
     let p = tri.v0.xyz * (1.0 - pt.b1 - pt.b2) + tri.v1.xyz * pt.b1 + tri.v2.xyz * pt.b2;
-    let v = vpls[s];
     let d = p - v.pos.xyz;
     let dist = length(d);
     if dist < 1e-6 {
