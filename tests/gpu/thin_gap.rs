@@ -426,11 +426,13 @@ fn the_gap_sweep_against_the_reference() {
         &[1, 2, 3, 4],
         Compensate::Auto,
     );
-    // Measured (docs/math.md, "The mouth's sliver, and the judge's own noise"): the largest
-    // relMSE 0.042 and 0.043 at 1 cm (+0.6%, +0.8%), 0.029 at 0.1 mm and less, the mean bias
-    // +2.1% to +2.3%; at 1 mm, on 4 x 4 blocks against the true image, 0.029 and 0.028, the mean
-    // -2.6% and -3.4% (seeds -9.8% to +4.6%). Stop 52, before the sliver's rounds: -5.5% and
-    // -4.9% (seeds -10.7% to -0.9%; over 16 seeds -2.2% +- 1.2% and -2.2% +- 1.6%).
+    // Measured (docs/math.md, "ISMs by a surface"): the largest relMSE 0.043 and 0.044 at
+    // 1 cm (+1.1%, +1.3%), 0.030 at 0.1 mm and less, the mean bias +2.5% to +2.7%; at 1 mm, on
+    // 4 x 4 blocks against the true image, 0.031 and 0.030, the mean -2.0% and -2.8% (seeds
+    // -9.3% to +5.3%). Stop 53, before the ISMs' near-field planes: 0.042 and 0.043 at 1 cm,
+    // +2.1% to +2.3% below 1 mm, -2.6% and -3.4% at 1 mm. Stop 52, before the sliver's
+    // rounds: -5.5% and -4.9% (seeds -10.7% to -0.9%; over 16 seeds -2.2% +- 1.2% and -2.2% +-
+    // 1.6%).
     // At the old ray offset, against its judge (stop 51), -0.5% and -2.3%, and over 16 seeds
     // -4.4% and -3.3%; with the walkers' rounds each a hypercube of its own (stop 50), -6.4%
     // and -5.2%; with cosine lobes on the way out, and none from the vertices deep in the gap
@@ -440,11 +442,12 @@ fn the_gap_sweep_against_the_reference() {
     assert_rows(&rows, [0.05, 0.04, 0.035]);
 }
 
-/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "The mouth's
-/// sliver, and the judge's own noise"): the largest relMSE 0.044 and 0.035 at 1 cm, 0.022 and
-/// less below 1 mm, the mean bias -1.0% to +1.1%; at 1 mm, on blocks against the true image,
-/// 0.023 and 0.024, the mean -0.9% and -2.4% (seeds -6.9% to +1.6%; over 16 seeds -1.8% and
-/// -2.5%, [`the_default_samplers_one_mm_rows_over_16_seeds`]). Stop 52: -2.8% and -3.7%;
+/// The sweep with the default sampler, `mh` (seeds 1-4). Measured (docs/math.md, "ISMs by a
+/// surface"): the largest relMSE 0.045 and 0.035 at 1 cm, 0.022 and less below 1 mm, the mean
+/// bias -0.6% to +1.4%; at 1 mm, on blocks against the true image, 0.023 and 0.025, the mean
+/// -0.3% and -1.8% (seeds -6.3% to +2.0%; over 16 seeds -1.3% and -1.9%,
+/// [`the_default_samplers_one_mm_rows_over_16_seeds`]). Stop 53: -0.9% and -2.4%; stop 52:
+/// -2.8% and -3.7%;
 /// stop 51, at the old ray offset against its judge: -0.5% and -1.6%; stop 50: -6.5% and
 /// -4.6%; stop 49: -8.7% and -7.0%; before the compensation walked the gap, 0.049 and 0.050,
 /// 27-29% under.
@@ -463,7 +466,8 @@ fn the_gap_sweep_with_the_default_sampler() {
 /// into the gap's mouth, and the light paths out of it), so four seeds' mean has a standard
 /// error of about 1.6%, and the judge's own is 1.1% (docs/math.md, "The mouth's sliver, and
 /// the judge's own noise"); [`the_default_samplers_one_mm_rows_over_16_seeds`] holds `mh`'s
-/// bias to 5% over 16 seeds too. Measured at stop 53: seeds 1-4 -3.4% to -0.9%. At stop 52,
+/// bias to 5% over 16 seeds too. Measured at stop 54: seeds 1-4 -2.8% to -0.3% (stop 53:
+/// -3.4% to -0.9%). At stop 52,
 /// before a pixel that sees the gap through a sliver took rounds for its points in it, the
 /// rows' frames swung by about 5%: -5.5% to -2.8%, and this bound was 8%; at stop 51, at the
 /// old offset of 1e-4 (a fifth of the gap), whose judge carried 8% too much of the gap's light,
@@ -838,8 +842,8 @@ fn one_mm_rows_over_16_seeds(
 /// camera's view into the gap's mouth, a hundredth of a pixel high, carries a quarter of the
 /// image): the default sampler's rows, both sides, over 16 seeds against the true image,
 /// their mean bias within 5%, the median relMSE within 0.025 and every seed's within 0.05
-/// (measured at stop 53: -1.8% +- 0.8% and -2.5% +- 0.8%, medians 0.017 and 0.015, the
-/// largest 0.023 and 0.024; at stop 52, before a pixel that sees the gap through a sliver
+/// (measured at stop 54: -1.3% +- 0.8% and -1.9% +- 0.8%, medians 0.017 and 0.015, the
+/// largest 0.023 and 0.025; stop 53: -1.8% and -2.5%, the largest 0.023 and 0.024; at stop 52, before a pixel that sees the gap through a sliver
 /// took rounds for its points in it, -1.8% +- 0.9% and -2.2% +- 1.3%, and the largest 0.023
 /// and 0.058, seed 15 single-sided, one pixel of the mouth at three times its mean). About 3
 /// minutes here.
